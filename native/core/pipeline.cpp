@@ -1,0 +1,130 @@
+#include "pipeline.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "errors.h"
+#include "parallel.h"
+#include "postprocess.h"
+#include "reconstruction.h"
+#include "weights.h"
+
+namespace meniscus {
+
+void validate(const PostprocessParams& p) {
+    if (p.smoothing_iterations < 0) throw InputError("smoothing_iterations must be >= 0, got " + std::to_string(p.smoothing_iterations));
+    if (!(p.smoothing_beta > 0.0 && p.smoothing_beta <= 1.0))
+        throw InputError("smoothing_beta must be in (0, 1], got " + std::to_string(p.smoothing_beta));
+    if (!std::isfinite(p.weights_normalization) || p.weights_normalization < 0.0)
+        throw InputError("weights_normalization must be 0 (automatic) or a positive number, got " + std::to_string(p.weights_normalization));
+    if (p.normal_smoothing_iterations < 0)
+        throw InputError("normal_smoothing_iterations must be >= 0, got " + std::to_string(p.normal_smoothing_iterations));
+    if (!std::isfinite(p.mesh_cleanup_snap_distance))
+        throw InputError("mesh_cleanup_snap_distance must be finite (negative: no limit)");
+}
+
+namespace {
+
+// Last line of defence for the host application: every vertex must be finite and near the particles (a single
+// vertex thrown far away makes renderers abort). Post-processing only averages positions, so this never triggers
+// unless a stage is wrong; it then repairs the vertex and says so rather than handing over a dangerous mesh.
+void guard_vertices(TriMesh& mesh, const SurfaceReconstruction& r, PipelineStats& stats) {
+    if (r.grid.size() == 0) return;
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (std::size_t j = 0; j < r.grid.size(); ++j)
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = std::min(lo[k], r.grid.position(j)[k]);
+            hi[k] = std::max(hi[k], r.grid.position(j)[k]);
+        }
+    const float margin = static_cast<float>(r.params.compact_support() + 2.0 * r.params.cube_edge());
+    std::size_t repaired = 0;
+    for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
+        bool bad = false;
+        for (int k = 0; k < 3; ++k) {
+            float& x = mesh.vertices[3 * v + k];
+            if (!std::isfinite(x) || x < lo[k] - margin || x > hi[k] + margin) {
+                bad = true;
+                x = std::isfinite(x) ? std::min(std::max(x, lo[k] - margin), hi[k] + margin) : 0.5f * (lo[k] + hi[k]);
+            }
+        }
+        repaired += bad;
+    }
+    for (float& n : mesh.normals)
+        if (!std::isfinite(n)) n = 0.0f;
+    if (repaired) stats.warnings.push_back("internal: " + std::to_string(repaired) + " vertices were outside the particles' reach and were clamped");
+}
+
+}  // namespace
+
+PipelineResult run_pipeline(const PositionsView& positions, const std::vector<AttributeInput>& attributes, const PipelineOptions& options) {
+    validate(options.reconstruction);
+    validate(options.postprocess);
+    for (const auto& a : attributes) {
+        if (a.components < 1 || a.components > 16)
+            throw InputError("attribute '" + a.name + "' must have 1 to 16 components, got " + std::to_string(a.components));
+        if (!a.values && positions.count > 0) throw InputError("attribute '" + a.name + "' has no data");
+    }
+    const int threads = resolve_threads(options.execution.threads);
+    const PostprocessParams& post = options.postprocess;
+
+    PipelineResult result;
+    PipelineStats& stats = result.stats;
+    if (positions.count == 0) stats.warnings.push_back("no particles: the mesh is empty");
+    SurfaceReconstruction r = reconstruct_surface(positions, options.reconstruction, options.execution, &stats);
+    TriMesh& mesh = r.mesh;
+    if (options.keep_raw_mesh) result.raw_mesh = mesh;
+
+    if (post.mesh_cleanup) {
+        StageTimer timer(&stats, "mesh cleanup");
+        const std::size_t removed = mesh_cleanup(mesh, options.reconstruction.cube_edge(), post.mesh_cleanup_snap_distance, threads);
+        stats.set_count("cleanup_removed_vertices", static_cast<double>(removed));
+    }
+    if (post.decimate_barnacles) {
+        StageTimer timer(&stats, "decimation");
+        const std::size_t removed = decimate_barnacles(mesh, threads);
+        stats.set_count("decimated_configurations", static_cast<double>(removed));
+    }
+
+    std::vector<float> weights;
+    const bool need_weights = (post.smoothing_iterations > 0 && post.smoothing_weights) || post.output_weights;
+    if (need_weights) {
+        StageTimer timer(&stats, "weights");
+        result.weights_normalization = halfspace_normalization(r, post.weights_normalization);
+        weights = feature_weights(r, mesh.vertices, result.weights_normalization, post.weights_smoothstep, threads);
+        stats.set_count("weights_normalization", result.weights_normalization);
+    }
+    if (post.output_weights) mesh.attributes.push_back({"weights", 1, weights});
+    if (post.smoothing_iterations > 0) {
+        StageTimer timer(&stats, "smoothing");
+        laplacian_smooth(mesh, post.smoothing_weights ? weights : std::vector<float>{}, post.smoothing_iterations, post.smoothing_beta, threads);
+    }
+
+    if (post.normals) {
+        StageTimer timer(&stats, "normals");
+        if (post.sph_normals) {
+            mesh.normals = colour_field_normals(r, mesh.vertices, threads);
+        } else {
+            compute_area_weighted_normals(mesh, threads);
+            if (post.normal_smoothing_iterations > 0) smooth_normals(mesh, post.normal_smoothing_iterations, threads);
+        }
+    } else {
+        mesh.normals.clear();
+    }
+
+    if (!attributes.empty()) {
+        StageTimer timer(&stats, "attributes");
+        for (const auto& a : attributes) {
+            Attribute out{a.name, a.components, {}};
+            interpolate_at_points(r, a.values, a.components, mesh.vertices, out.values, threads);
+            mesh.attributes.push_back(std::move(out));
+        }
+    }
+    guard_vertices(mesh, r, stats);
+    stats.set_count("vertices", static_cast<double>(mesh.num_vertices()));
+    stats.set_count("triangles", static_cast<double>(mesh.num_triangles()));
+    result.mesh = std::move(mesh);
+    return result;
+}
+
+}  // namespace meniscus

@@ -1,0 +1,263 @@
+// The Python binding: thin by design. It checks and converts arguments without copying (positions and particle
+// attributes are read in place), releases the GIL, calls the core, and hands results back as numpy arrays that
+// own the core's buffers. Core errors map one to one: InputError -> ValueError, FormatError -> meniscus.FormatError
+// (a ValueError), ResourceError -> MemoryError.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "errors.h"
+#include "io.h"
+#include "pipeline.h"
+#include "postprocess.h"
+
+namespace py = pybind11;
+using namespace meniscus;
+
+namespace {
+
+// Moves a vector into a numpy array without copying: the array owns the vector through a capsule.
+template <class T>
+py::array_t<T> to_numpy(std::vector<T>&& values, std::vector<py::ssize_t> shape) {
+    auto* owner = new std::vector<T>(std::move(values));
+    py::capsule capsule(owner, [](void* p) { delete static_cast<std::vector<T>*>(p); });
+    return py::array_t<T>(shape, owner->data(), capsule);
+}
+
+py::dict attributes_to_dict(std::vector<Attribute>&& attributes) {
+    py::dict out;
+    for (auto& a : attributes) {
+        const py::ssize_t count = static_cast<py::ssize_t>(a.count());
+        std::vector<py::ssize_t> shape = a.components == 1 ? std::vector<py::ssize_t>{count} : std::vector<py::ssize_t>{count, a.components};
+        out[py::str(a.name)] = to_numpy(std::move(a.values), shape);
+    }
+    return out;
+}
+
+py::dict mesh_to_dict(TriMesh&& mesh) {
+    py::dict out;
+    const py::ssize_t v = static_cast<py::ssize_t>(mesh.num_vertices()), f = static_cast<py::ssize_t>(mesh.num_triangles());
+    const bool has_normals = !mesh.normals.empty();
+    out["vertices"] = to_numpy(std::move(mesh.vertices), {v, 3});
+    out["triangles"] = to_numpy(std::move(mesh.triangles), {f, 3});
+    out["normals"] = has_normals ? py::object(to_numpy(std::move(mesh.normals), {v, 3})) : py::object(py::none());
+    out["attributes"] = attributes_to_dict(std::move(mesh.attributes));
+    return out;
+}
+
+py::dict stats_to_dict(const PipelineStats& stats) {
+    py::dict seconds, counts;
+    for (const auto& s : stats.stage_seconds) seconds[py::str(s.first)] = s.second;
+    for (const auto& c : stats.counts) counts[py::str(c.first)] = c.second;
+    py::dict out;
+    out["seconds"] = seconds;
+    out["counts"] = counts;
+    out["warnings"] = stats.warnings;
+    return out;
+}
+
+// Checks a float array's dtype, layout and shape; names the argument and says what it got.
+void require_float_array(const py::array& a, const std::string& name, bool allow_double, int columns) {
+    const bool is_f32 = a.dtype().is(py::dtype::of<float>());
+    const bool is_f64 = a.dtype().is(py::dtype::of<double>());
+    if (!is_f32 && !(allow_double && is_f64))
+        throw InputError(name + " must be " + (allow_double ? "float32 or float64" : "float32") + ", got dtype " +
+                         py::str(a.dtype()).cast<std::string>());
+    if (!(a.flags() & py::array::c_style)) throw InputError(name + " must be C-contiguous (use numpy.ascontiguousarray)");
+    if (columns > 0 && (a.ndim() != 2 || a.shape(1) != columns))
+        throw InputError(name + " must have shape (N, " + std::to_string(columns) + "), got " + py::str(py::tuple(py::cast(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim())))).cast<std::string>());
+}
+
+PositionsView positions_view(const py::array& positions) {
+    require_float_array(positions, "positions", true, 3);
+    const std::size_t n = static_cast<std::size_t>(positions.shape(0));
+    if (positions.dtype().is(py::dtype::of<float>())) return PositionsView(static_cast<const float*>(positions.data()), n);
+    return PositionsView(static_cast<const double*>(positions.data()), n);
+}
+
+py::dict reconstruct(const py::array& positions, double particle_radius, double smoothing_length, double cube_size, double iso_threshold,
+                     const py::dict& attributes, bool mesh_cleanup, double mesh_cleanup_snap_distance, bool decimate_barnacles,
+                     int smoothing_iterations, double smoothing_beta, bool smoothing_weights, double weights_normalization,
+                     bool weights_smoothstep, bool output_weights, bool normals, int normal_smoothing_iterations, bool sph_normals, int threads,
+                     std::size_t memory_budget, bool skip_invalid, bool keep_raw_mesh) {
+    const PositionsView view = positions_view(positions);
+    std::vector<AttributeInput> inputs;
+    for (const auto& item : attributes) {
+        const std::string name = py::str(item.first);
+        const py::array values = py::reinterpret_borrow<py::array>(item.second);
+        if (!py::isinstance<py::array>(item.second)) throw InputError("attribute '" + name + "' must be a numpy array");
+        require_float_array(values, "attribute '" + name + "'", false, 0);
+        if (values.ndim() < 1 || values.ndim() > 2 || static_cast<std::size_t>(values.shape(0)) != view.count)
+            throw InputError("attribute '" + name + "' must have shape (N,) or (N, k) with N = " + std::to_string(view.count) + " particles");
+        inputs.push_back({name, static_cast<const float*>(values.data()), values.ndim() == 2 ? static_cast<int>(values.shape(1)) : 1});
+    }
+    PipelineOptions options;
+    options.reconstruction = {particle_radius, smoothing_length, cube_size, iso_threshold};
+    PostprocessParams& p = options.postprocess;
+    p.mesh_cleanup = mesh_cleanup;
+    p.mesh_cleanup_snap_distance = mesh_cleanup_snap_distance;
+    p.decimate_barnacles = decimate_barnacles;
+    p.smoothing_iterations = smoothing_iterations;
+    p.smoothing_beta = smoothing_beta;
+    p.smoothing_weights = smoothing_weights;
+    p.weights_normalization = weights_normalization;
+    p.weights_smoothstep = weights_smoothstep;
+    p.output_weights = output_weights;
+    p.normals = normals;
+    p.normal_smoothing_iterations = normal_smoothing_iterations;
+    p.sph_normals = sph_normals;
+    if (threads < 0) throw InputError("threads must be >= 0 (0: all cores), got " + std::to_string(threads));
+    options.execution = {threads, memory_budget, skip_invalid};
+    options.keep_raw_mesh = keep_raw_mesh;
+
+    PipelineResult result;
+    {
+        py::gil_scoped_release release;
+        result = run_pipeline(view, inputs, options);
+    }
+    py::dict out = mesh_to_dict(std::move(result.mesh));
+    out["raw"] = keep_raw_mesh ? py::object(mesh_to_dict(std::move(result.raw_mesh))) : py::object(py::none());
+    out["stats"] = stats_to_dict(result.stats);
+    out["weights_normalization"] = result.weights_normalization;
+    return out;
+}
+
+py::dict read_particle_file(const std::string& path) {
+    ParticleData data;
+    {
+        py::gil_scoped_release release;
+        data = read_particles(path);
+    }
+    py::dict out;
+    const py::ssize_t n = static_cast<py::ssize_t>(data.size());
+    out["positions"] = to_numpy(std::move(data.positions), {n, 3});
+    out["attributes"] = attributes_to_dict(std::move(data.attributes));
+    return out;
+}
+
+TriMesh mesh_from_arrays(const py::array& vertices, const py::array& triangles, const py::object& normals, const py::dict& attributes) {
+    require_float_array(vertices, "vertices", false, 3);
+    if (!triangles.dtype().is(py::dtype::of<int32_t>()) || !(triangles.flags() & py::array::c_style) || triangles.ndim() != 2 || triangles.shape(1) != 3)
+        throw InputError("triangles must be a C-contiguous int32 array of shape (F, 3)");
+    TriMesh mesh;
+    const float* v = static_cast<const float*>(vertices.data());
+    mesh.vertices.assign(v, v + vertices.size());
+    const int32_t* t = static_cast<const int32_t*>(triangles.data());
+    mesh.triangles.assign(t, t + triangles.size());
+    for (int32_t index : mesh.triangles)
+        if (index < 0 || static_cast<std::size_t>(index) >= mesh.num_vertices())
+            throw InputError("triangles refer to vertex " + std::to_string(index) + " but there are " + std::to_string(mesh.num_vertices()) + " vertices");
+    if (!normals.is_none()) {
+        const py::array n = py::reinterpret_borrow<py::array>(normals);
+        require_float_array(n, "normals", false, 3);
+        if (n.shape(0) != vertices.shape(0)) throw InputError("normals must have one row per vertex");
+        mesh.normals.assign(static_cast<const float*>(n.data()), static_cast<const float*>(n.data()) + n.size());
+    }
+    for (const auto& item : attributes) {
+        const std::string name = py::str(item.first);
+        const py::array a = py::reinterpret_borrow<py::array>(item.second);
+        require_float_array(a, "attribute '" + name + "'", false, 0);
+        if (a.ndim() < 1 || a.ndim() > 2 || a.shape(0) != vertices.shape(0)) throw InputError("attribute '" + name + "' must have one row per vertex");
+        Attribute out{name, a.ndim() == 2 ? static_cast<int>(a.shape(1)) : 1, {}};
+        out.values.assign(static_cast<const float*>(a.data()), static_cast<const float*>(a.data()) + a.size());
+        mesh.attributes.push_back(std::move(out));
+    }
+    return mesh;
+}
+
+py::dict check_to_dict(const MeshCheck& c) {
+    py::dict out;
+    out["closed"] = c.closed();
+    out["manifold"] = c.manifold();
+    out["oriented"] = c.oriented();
+    out["ok"] = c.ok();
+    out["boundary_edges"] = c.boundary_edges;
+    out["non_manifold_edges"] = c.non_manifold_edges;
+    out["non_manifold_vertices"] = c.non_manifold_vertices;
+    out["inconsistent_edges"] = c.inconsistent_edges;
+    out["degenerate_triangles"] = c.degenerate_triangles;
+    out["non_finite_vertices"] = c.non_finite_vertices;
+    out["unreferenced_vertices"] = c.unreferenced_vertices;
+    out["summary"] = c.summary();
+    return out;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+    m.doc() = "Meniscus native core: particle files, surface reconstruction and post-processing";
+    m.attr("__version__") = MENISCUS_VERSION;
+
+    static py::exception<FormatError> format_error(m, "FormatError", PyExc_ValueError);
+    py::register_exception_translator([](std::exception_ptr p) {
+        try {
+            if (p) std::rethrow_exception(p);
+        } catch (const FormatError& e) {
+            PyErr_SetString(format_error.ptr(), e.what());
+        } catch (const InputError& e) {
+            PyErr_SetString(PyExc_ValueError, e.what());
+        } catch (const ResourceError& e) {
+            PyErr_SetString(PyExc_MemoryError, e.what());
+        }
+    });
+
+    m.def("reconstruct", &reconstruct, py::arg("positions"), py::arg("particle_radius"), py::arg("smoothing_length") = 2.0,
+          py::arg("cube_size") = 0.5, py::arg("iso_threshold") = 0.6, py::arg("attributes") = py::dict(), py::arg("mesh_cleanup") = false,
+          py::arg("mesh_cleanup_snap_distance") = -1.0, py::arg("decimate_barnacles") = false, py::arg("smoothing_iterations") = 0,
+          py::arg("smoothing_beta") = 1.0, py::arg("smoothing_weights") = true, py::arg("weights_normalization") = 0.0,
+          py::arg("weights_smoothstep") = true, py::arg("output_weights") = false, py::arg("normals") = true,
+          py::arg("normal_smoothing_iterations") = 0, py::arg("sph_normals") = false, py::arg("threads") = 0, py::arg("memory_budget") = 0,
+          py::arg("skip_invalid") = false, py::arg("keep_raw_mesh") = false,
+          "Runs the pipeline on (N, 3) float32/float64 positions; returns a dict of numpy arrays and stats.");
+    m.def("read_particles", &read_particle_file, py::arg("path"), "Reads a particle file: dict with 'positions' (N, 3) float32 and 'attributes'.");
+    m.def("read_mesh", [](const std::string& path) {
+        TriMesh mesh;
+        {
+            py::gil_scoped_release release;
+            mesh = read_mesh(path);
+        }
+        return mesh_to_dict(std::move(mesh));
+    }, py::arg("path"));
+    m.def("write_mesh", [](const std::string& path, const py::array& vertices, const py::array& triangles, const py::object& normals,
+                           const py::dict& attributes) {
+        TriMesh mesh = mesh_from_arrays(vertices, triangles, normals, attributes);
+        py::gil_scoped_release release;
+        write_mesh(mesh, path);
+    }, py::arg("path"), py::arg("vertices"), py::arg("triangles"), py::arg("normals") = py::none(), py::arg("attributes") = py::dict());
+    m.def("check_mesh", [](const py::array& vertices, const py::array& triangles) {
+        TriMesh mesh = mesh_from_arrays(vertices, triangles, py::none(), py::dict());
+        MeshCheck check;
+        {
+            py::gil_scoped_release release;
+            check = check_mesh(mesh);
+        }
+        return check_to_dict(check);
+    }, py::arg("vertices"), py::arg("triangles"));
+    m.def("assess_quality", [](const py::array& vertices, const py::array& triangles, int threads) {
+        TriMesh mesh = mesh_from_arrays(vertices, triangles, py::none(), py::dict());
+        MeshQuality q;
+        {
+            py::gil_scoped_release release;
+            q = assess_quality(mesh, threads);
+        }
+        py::dict out;
+        out["check"] = check_to_dict(q.check);
+        out["vertices"] = q.vertices;
+        out["triangles"] = q.triangles;
+        out["volume"] = q.volume;
+        out["area"] = q.area;
+        py::list components;
+        for (const auto& c : q.components) components.append(py::make_tuple(c.triangles, c.volume));
+        out["components"] = components;
+        out["bumpiness"] = q.bumpiness;
+        out["mean_normal_angle_deg"] = q.mean_normal_angle_deg;
+        out["valence_histogram"] = q.valence_histogram;
+        out["single_vertex_configurations"] = q.single_vertex_configurations;
+        out["double_vertex_configurations"] = q.double_vertex_configurations;
+        return out;
+    }, py::arg("vertices"), py::arg("triangles"), py::arg("threads") = 0);
+}
