@@ -12,11 +12,14 @@ namespace meniscus {
 // Reads a particle file; the format is chosen by content (magic bytes / header), falling back to the extension.
 // Supported: legacy VTK (ASCII and binary big-endian; UNSTRUCTURED_GRID and POLYDATA; float and double; POINT_DATA
 // SCALARS / VECTORS / FIELD arrays), BGEO v5 (Partio layout, gzip-compressed or plain).
-// Attributes become float32 arrays (ints converted), named as in the file.
+// Attributes become float32 arrays (ints converted), named as in the file. Legacy VTK "long" is read as 8 bytes (as
+// VTK writes it on 64-bit Unix). gzip output is capped at 64x the compressed size + 64 MiB (see io_util.h).
 ParticleData read_particles(const std::string& path);
 
 // Writes a mesh; the format follows the extension: .ply (binary little-endian, with normals and every vertex
 // attribute), .obj (with normals), .vtk (legacy, binary, POLYDATA with normals and attributes as point data).
+// PLY attribute properties: NAME for 1 component, NAME_x NAME_y NAME_z for 3, NAME_0 .. NAME_{k-1} otherwise (details
+// in io_mesh.cpp). An invalid mesh or an unknown extension is an InputError; a failed write a FormatError.
 void write_mesh(const TriMesh& mesh, const std::string& path);
 
 // Reads a triangle mesh written by write_mesh (PLY binary/ASCII or OBJ), with normals and attributes where present.
