@@ -58,7 +58,8 @@ def reconstruct(positions, particle_radius: float, smoothing_length: float = 2.0
                 iso_threshold: float = 0.6, *, attributes: Optional[Dict[str, np.ndarray]] = None,
                 mesh_cleanup: bool = False, mesh_cleanup_snap_distance: float = -1.0, decimate_barnacles: bool = False,
                 smoothing_iterations: int = 0, smoothing_beta: float = 1.0, smoothing_weights: bool = True,
-                weights_normalization: float = 0.0, weights_smoothstep: bool = True, output_weights: bool = False,
+                weights_normalization: float = 0.0, weights_smoothstep: bool = True, volume_restoration: bool = True,
+                output_weights: bool = False,
                 normals: bool = True, normal_smoothing_iterations: int = 0, sph_normals: bool = False,
                 threads: int = 0, memory_budget: int = 0, skip_invalid: bool = False,
                 keep_raw_mesh: bool = False) -> Mesh:
@@ -75,7 +76,7 @@ def reconstruct(positions, particle_radius: float, smoothing_length: float = 2.0
         positions, float(particle_radius), float(smoothing_length), float(cube_size), float(iso_threshold), converted,
         bool(mesh_cleanup), float(mesh_cleanup_snap_distance), bool(decimate_barnacles), int(smoothing_iterations),
         float(smoothing_beta), bool(smoothing_weights), float(weights_normalization), bool(weights_smoothstep),
-        bool(output_weights), bool(normals), int(normal_smoothing_iterations), bool(sph_normals), int(threads),
+        bool(volume_restoration), bool(output_weights), bool(normals), int(normal_smoothing_iterations), bool(sph_normals), int(threads),
         int(memory_budget), bool(skip_invalid), bool(keep_raw_mesh))
     mesh = _mesh(result)
     mesh.stats = result["stats"]

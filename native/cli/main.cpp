@@ -162,7 +162,7 @@ struct ReconstructArgs {
     bool quiet = false;
     double memory_budget_gib = 0.0;
     std::string weights_switch = "on", weights_normalization = "auto", decimate_switch = "on", cleanup_switch = "off", normals_switch = "on",
-                sph_normals_switch = "off";
+                sph_normals_switch = "off", restoration_switch = "on";
 };
 
 // Runs one frame; returns the frame's JSON record. Throws on failure (the caller reports and goes on).
@@ -215,6 +215,7 @@ int reconstruct_command(ReconstructArgs& args) {
     args.post.mesh_cleanup = parse_on_off(args.cleanup_switch, "--mesh-cleanup");
     args.post.normals = parse_on_off(args.normals_switch, "--normals");
     args.post.sph_normals = parse_on_off(args.sph_normals_switch, "--sph-normals");
+    args.post.volume_restoration = parse_on_off(args.restoration_switch, "--mesh-smoothing-volume-restoration");
     if (args.weights_normalization == "auto") {
         args.post.weights_normalization = 0.0;
     } else {
@@ -365,6 +366,8 @@ int main(int argc, char** argv) {
     reconstruct->add_option("--mesh-smoothing-weights", args.weights_switch, "Feature weights on|off (off: plain uniform smoothing)")->capture_default_str();
     reconstruct->add_option("--mesh-smoothing-weights-normalization", args.weights_normalization, "Half-space count N_HS: auto or a number")->capture_default_str();
     reconstruct->add_option("--mesh-smoothing-beta", args.post.smoothing_beta, "Smoothing step scale in (0, 1]")->capture_default_str();
+    reconstruct->add_option("--mesh-smoothing-volume-restoration", args.restoration_switch,
+                            "Give each connected component back the volume smoothing took on|off")->capture_default_str();
     reconstruct->add_option("--decimate-barnacles", args.decimate_switch, "Remove single/double-vertex MC configurations on|off")->capture_default_str();
     reconstruct->add_option("--mesh-cleanup", args.cleanup_switch, "Collapse vertices sharing a grid point on|off")->capture_default_str();
     reconstruct->add_option("--mesh-cleanup-snap-dist", args.post.mesh_cleanup_snap_distance, "Cleanup only within this distance (multiple of the cube size) of a grid point");

@@ -26,6 +26,7 @@ struct PostprocessParams {
     bool smoothing_weights = true;            // feature weights (Sec. 3.2); off: uniform smoothing
     double weights_normalization = 0.0;       // N_HS; <= 0 means automatic
     bool weights_smoothstep = true;           // Eq. 9
+    bool volume_restoration = true;           // give each component back the volume smoothing took (volume.h)
     bool output_weights = false;              // add the weights as vertex attribute "weights"
     bool normals = true;                      // area-weighted vertex normals
     int normal_smoothing_iterations = 0;      // Eq. 12

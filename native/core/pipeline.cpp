@@ -8,6 +8,7 @@
 #include "parallel.h"
 #include "postprocess.h"
 #include "reconstruction.h"
+#include "volume.h"
 #include "weights.h"
 
 namespace meniscus {
@@ -97,7 +98,19 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
     if (post.output_weights) mesh.attributes.push_back({"weights", 1, weights});
     if (post.smoothing_iterations > 0) {
         StageTimer timer(&stats, "smoothing");
-        laplacian_smooth(mesh, post.smoothing_weights ? weights : std::vector<float>{}, post.smoothing_iterations, post.smoothing_beta, threads);
+        const std::vector<float> smoothing_amount = post.smoothing_weights ? weights : std::vector<float>{};
+        int32_t components = 0;
+        std::vector<int32_t> labels;
+        std::vector<double> volumes;
+        if (post.volume_restoration) {
+            labels = component_labels(mesh, &components);
+            volumes = component_volumes(mesh, labels, components);
+        }
+        laplacian_smooth(mesh, smoothing_amount, post.smoothing_iterations, post.smoothing_beta, threads);
+        if (post.volume_restoration) {
+            StageTimer restoration_timer(&stats, "volume restoration");
+            restore_component_volumes(mesh, labels, volumes, smoothing_amount, options.reconstruction.compact_support(), threads);
+        }
     }
 
     if (post.normals) {

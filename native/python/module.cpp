@@ -82,7 +82,7 @@ PositionsView positions_view(const py::array& positions) {
 py::dict reconstruct(const py::array& positions, double particle_radius, double smoothing_length, double cube_size, double iso_threshold,
                      const py::dict& attributes, bool mesh_cleanup, double mesh_cleanup_snap_distance, bool decimate_barnacles,
                      int smoothing_iterations, double smoothing_beta, bool smoothing_weights, double weights_normalization,
-                     bool weights_smoothstep, bool output_weights, bool normals, int normal_smoothing_iterations, bool sph_normals, int threads,
+                     bool weights_smoothstep, bool volume_restoration, bool output_weights, bool normals, int normal_smoothing_iterations, bool sph_normals, int threads,
                      std::size_t memory_budget, bool skip_invalid, bool keep_raw_mesh) {
     const PositionsView view = positions_view(positions);
     std::vector<AttributeInput> inputs;
@@ -106,6 +106,7 @@ py::dict reconstruct(const py::array& positions, double particle_radius, double 
     p.smoothing_weights = smoothing_weights;
     p.weights_normalization = weights_normalization;
     p.weights_smoothstep = weights_smoothstep;
+    p.volume_restoration = volume_restoration;
     p.output_weights = output_weights;
     p.normals = normals;
     p.normal_smoothing_iterations = normal_smoothing_iterations;
@@ -209,7 +210,7 @@ PYBIND11_MODULE(_core, m) {
           py::arg("cube_size") = 0.5, py::arg("iso_threshold") = 0.6, py::arg("attributes") = py::dict(), py::arg("mesh_cleanup") = false,
           py::arg("mesh_cleanup_snap_distance") = -1.0, py::arg("decimate_barnacles") = false, py::arg("smoothing_iterations") = 0,
           py::arg("smoothing_beta") = 1.0, py::arg("smoothing_weights") = true, py::arg("weights_normalization") = 0.0,
-          py::arg("weights_smoothstep") = true, py::arg("output_weights") = false, py::arg("normals") = true,
+          py::arg("weights_smoothstep") = true, py::arg("volume_restoration") = true, py::arg("output_weights") = false, py::arg("normals") = true,
           py::arg("normal_smoothing_iterations") = 0, py::arg("sph_normals") = false, py::arg("threads") = 0, py::arg("memory_budget") = 0,
           py::arg("skip_invalid") = false, py::arg("keep_raw_mesh") = false,
           "Runs the pipeline on (N, 3) float32/float64 positions; returns a dict of numpy arrays and stats.");

@@ -1,0 +1,110 @@
+#include "volume.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "postprocess.h"
+
+namespace meniscus {
+
+namespace {
+
+int32_t find_root(std::vector<int32_t>& parent, int32_t v) {
+    while (parent[v] != v) {
+        parent[v] = parent[parent[v]];
+        v = parent[v];
+    }
+    return v;
+}
+
+}  // namespace
+
+std::vector<int32_t> component_labels(const TriMesh& mesh, int32_t* count) {
+    const std::size_t n = mesh.num_vertices();
+    std::vector<int32_t> parent(n);
+    std::iota(parent.begin(), parent.end(), 0);
+    for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
+        const int32_t* tri = &mesh.triangles[3 * t];
+        for (int k = 1; k < 3; ++k) {
+            const int32_t a = find_root(parent, tri[0]), b = find_root(parent, tri[k]);
+            if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the smaller index is the root: deterministic
+        }
+    }
+    std::vector<int32_t> labels(n, -1);
+    int32_t next = 0;
+    for (std::size_t v = 0; v < n; ++v) {
+        const int32_t root = find_root(parent, static_cast<int32_t>(v));
+        if (labels[root] < 0) labels[root] = next++;
+        labels[v] = labels[root];
+    }
+    if (count) *count = next;
+    return labels;
+}
+
+std::vector<double> component_volumes(const TriMesh& mesh, const std::vector<int32_t>& labels, int32_t count) {
+    std::vector<double> volume(static_cast<std::size_t>(count), 0.0);
+    // Relative to each component's first vertex: keeps the sum accurate far from the origin.
+    std::vector<int32_t> reference(static_cast<std::size_t>(count), -1);
+    for (std::size_t v = 0; v < labels.size(); ++v)
+        if (reference[labels[v]] < 0) reference[labels[v]] = static_cast<int32_t>(v);
+    for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
+        const int32_t* tri = &mesh.triangles[3 * t];
+        const int32_t c = labels[tri[0]];
+        const float* o = &mesh.vertices[3 * reference[c]];
+        double p[3][3];
+        for (int i = 0; i < 3; ++i)
+            for (int k = 0; k < 3; ++k) p[i][k] = double(mesh.vertices[3 * tri[i] + k]) - double(o[k]);
+        volume[c] += (p[0][0] * (p[1][1] * p[2][2] - p[1][2] * p[2][1]) - p[0][1] * (p[1][0] * p[2][2] - p[1][2] * p[2][0]) +
+                      p[0][2] * (p[1][0] * p[2][1] - p[1][1] * p[2][0])) / 6.0;
+    }
+    return volume;
+}
+
+void restore_component_volumes(TriMesh& mesh, const std::vector<int32_t>& labels, const std::vector<double>& target,
+                               const std::vector<float>& amount, double max_offset, int threads) {
+    const int32_t count = static_cast<int32_t>(target.size());
+    if (count == 0 || mesh.num_triangles() == 0) return;
+    const std::vector<float> saved_normals = mesh.normals;
+    std::vector<double> applied(static_cast<std::size_t>(count), 0.0);
+    // Volume is close to linear in the offset for offsets small against the feature size: three Newton steps
+    // bring it within a small fraction of a percent.
+    for (int step = 0; step < 3; ++step) {
+        const std::vector<double> volume = component_volumes(mesh, labels, count);
+        // Smoothed normals: offsets along raw vertex normals would print the triangulation's noise back in.
+        compute_area_weighted_normals(mesh, threads);
+        smooth_normals(mesh, 10, threads);
+        // d volume / d s = sum_i amount_i * A_i, with A_i a third of the incident triangle areas.
+        std::vector<double> rate(static_cast<std::size_t>(count), 0.0);
+        for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
+            const int32_t* tri = &mesh.triangles[3 * t];
+            const float* a = &mesh.vertices[3 * tri[0]];
+            const float* b = &mesh.vertices[3 * tri[1]];
+            const float* c = &mesh.vertices[3 * tri[2]];
+            const double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
+            const double w[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
+            const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+            const double third_area = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / 6.0;
+            for (int i = 0; i < 3; ++i) rate[labels[tri[0]]] += third_area * (amount.empty() ? 1.0 : double(amount[tri[i]]));
+        }
+        std::vector<double> offset(static_cast<std::size_t>(count), 0.0);
+        bool any = false;
+        for (int32_t c = 0; c < count; ++c) {
+            if (rate[c] <= 0.0) continue;
+            double s = (target[c] - volume[c]) / rate[c];
+            // Cap the accumulated offset: a component that smoothing collapsed is not blown back up from nothing.
+            s = std::min(std::max(applied[c] + s, -max_offset), max_offset) - applied[c];
+            applied[c] += s;
+            offset[c] = s;
+            any = any || s != 0.0;
+        }
+        if (!any) break;
+        for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
+            const double s = offset[labels[v]] * (amount.empty() ? 1.0 : double(amount[v]));
+            for (int k = 0; k < 3; ++k) mesh.vertices[3 * v + k] = static_cast<float>(mesh.vertices[3 * v + k] + s * mesh.normals[3 * v + k]);
+        }
+    }
+    mesh.normals = saved_normals;
+}
+
+}  // namespace meniscus

@@ -1,0 +1,76 @@
+"""The command-line tool: single frames, sequences with gaps and broken frames, stats, output formats."""
+import json
+import shutil
+import subprocess
+
+import pytest
+
+import meniscus
+
+
+def run(cli, *args):
+    return subprocess.run([cli, *map(str, args)], capture_output=True, text=True, timeout=600)
+
+
+@pytest.mark.parametrize("extension", ["ply", "obj", "vtk"])
+def test_single_frame_writes_mesh_and_stats(cli, shared, tmp_path, extension):
+    out = tmp_path / f"bunny.{extension}"
+    stats = tmp_path / "stats.json"
+    result = run(cli, "reconstruct", shared / "splashsurf/bunny_frame_14_7705_particles.vtk", "-o", out, "-r", 0.025, "-l", 2,
+                 "-c", 1.0, "-t", 0.6, "--threads", 2, "--stats", stats, "--check-mesh", "-a", "velocity")
+    assert result.returncode == 0, result.stderr
+    assert out.stat().st_size > 100000
+    report = json.loads(stats.read_text())
+    frame = report["frames"][0]
+    assert frame["check"]["ok"]
+    assert frame["counts"]["particles"] == 7706
+    assert {"read", "neighborhood", "density", "level set and marching cubes", "write"} <= set(frame["seconds"])
+    assert report["peak_memory_bytes"] > 0
+    if extension != "vtk":
+        mesh = meniscus.read_mesh(out)
+        assert meniscus.check_mesh(mesh)["ok"]
+        if extension == "ply":
+            assert "velocity" in mesh.attributes and mesh.normals is not None
+
+
+def test_sequence_with_missing_and_broken_frames_goes_on(cli, shared, tmp_path):
+    source = shared / "sequence"
+    frames = tmp_path / "in"
+    frames.mkdir()
+    for n in (10, 11, 13):
+        shutil.copy(source / f"double_dam_break_{n:04d}.vtk", frames / f"fluid_{n:04d}.vtk")
+    (frames / "fluid_0012.vtk").write_bytes((source / "double_dam_break_0012.vtk").read_bytes()[:5000])  # truncated
+    stats = tmp_path / "stats.json"
+    result = run(cli, "reconstruct", frames / "fluid_{}.vtk", "-o", tmp_path / "out_{}.ply", "-r", 0.025, "-c", 1.0,
+                 "-s", 10, "-e", 14, "--stats", stats)
+    assert result.returncode == 1  # some frames failed, the others were written
+    assert "fluid_0012.vtk" in result.stderr and "truncated" in result.stderr
+    assert "frame 14 is missing" in result.stderr
+    for n in (10, 11, 13):
+        assert (tmp_path / f"out_{n:04d}.ply").exists()
+    assert not (tmp_path / "out_0012.ply").exists()
+    report = json.loads(stats.read_text())
+    assert report["failed_frames"] == 2
+    assert [f.get("failed") is None for f in report["frames"]] == [True, True, False, True, False]
+
+
+def test_bad_parameters_and_missing_attribute_are_reported(cli, shared, tmp_path):
+    result = run(cli, "reconstruct", shared / "splashsurf/hilbert2_7954_particles.vtk", "-o", tmp_path / "x.ply", "-r", -1)
+    assert result.returncode != 0 and "particle_radius" in result.stderr
+    result = run(cli, "reconstruct", shared / "splashsurf/hilbert2_7954_particles.vtk", "-o", tmp_path / "x.ply", "-r", 0.025,
+                 "-a", "velocity")
+    assert result.returncode != 0 and "no particle attribute 'velocity'" in result.stderr and "id" in result.stderr
+
+
+def test_inspect_reports_quality(cli, shared, tmp_path):
+    out, raw = tmp_path / "mesh.ply", tmp_path / "raw.ply"
+    assert run(cli, "reconstruct", shared / "splashsurf/double_dam_break_frame_26_4732_particles.vtk", "-o", out,
+               "--output-raw-mesh", raw, "-r", 0.025, "-c", 0.5).returncode == 0
+    report_path = tmp_path / "report.json"
+    result = run(cli, "inspect", out, "--raw", raw, "--json", report_path)
+    assert result.returncode == 0, result.stdout + result.stderr
+    report = json.loads(report_path.read_text())
+    assert report["mesh"]["check"]["ok"]
+    assert 0.97 < report["volume_ratio"] < 1.03
+    assert report["bumpiness_ratio"] < 0.5
+    assert "bumpiness" in result.stdout
