@@ -1,0 +1,183 @@
+"""Operators: add a particle sequence as a surface object, reload surfaces, reset a frame range from the files."""
+import os
+
+import bpy
+from bpy.props import BoolProperty, FloatProperty, StringProperty
+from bpy_extras.io_utils import ImportHelper
+
+from .. import sequence
+from . import handlers, material
+
+# The formats the core reads (each also gzip-compressed), for the file browser's filter.
+PARTICLE_FILE_GLOB = "*.vtk;*.vtu;*.vtp;*.bgeo;*.bhclassic;*.ply;*.npy;*.npz;*.csv;*.xyz;*.gz"
+
+
+def _object_name(pattern):
+    # 'double_dam_break_' -> 'double_dam_break': the prefix names the sequence without its separator.
+    name = pattern.prefix.rstrip("_-. ")
+    return name or "Fluid Surface"
+
+
+def _stored_path(pattern_string, make_relative):
+    """The path to keep in the object's property: relative to the .blend where possible and wanted."""
+    # An unsaved file has no folder to be relative to, so the path stays absolute until the user saves and re-adds.
+    if make_relative and bpy.data.is_saved:
+        try:
+            return bpy.path.relpath(pattern_string)
+        except ValueError:  # another drive on Windows: no relative path exists
+            pass
+    return pattern_string
+
+
+class MENISCUS_OT_add_sequence(bpy.types.Operator, ImportHelper):
+    """Add a fluid surface object that is rebuilt from a sequence of particle files on every frame"""
+    bl_idname = "meniscus.add_sequence"
+    bl_label = "Add Particle Sequence"
+    bl_options = {"REGISTER", "UNDO"}
+
+    # ImportHelper provides `filepath` (a file of the sequence, or a pattern with #### or {} from scripts).
+    filename_ext = ""
+    filter_glob: StringProperty(default=PARTICLE_FILE_GLOB, options={"HIDDEN"})
+    relative_path: BoolProperty(
+        name="Relative Path",
+        description="Store the path relative to the .blend file (once it is saved)",
+        default=True,
+    )
+    particle_radius: FloatProperty(
+        name="Particle Radius",
+        description="Radius of one particle in scene units; the other lengths are multiples of it",
+        default=0.025, min=1e-6, soft_min=1e-4, soft_max=1.0, precision=4, step=0.1, subtype="DISTANCE", unit="LENGTH",
+    )
+    use_scene_frame_range: BoolProperty(
+        name="Set Scene Frame Range",
+        description="Set the scene's start and end frames to the frames found on disk",
+        default=False,
+    )
+
+    def execute(self, context):
+        text = self.filepath
+        if not text:
+            self.report({"ERROR"}, "No file given")
+            return {"CANCELLED"}
+        absolute = os.path.abspath(bpy.path.abspath(text))
+        try:
+            pattern = sequence.parse_pattern(absolute)
+        except ValueError as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        frames = pattern.list_frames()
+        if not frames:
+            self.report({"ERROR"}, f"No particle files match {pattern.pattern_string()}")
+            return {"CANCELLED"}
+        first, last = sequence.frame_range(frames)
+
+        scene = context.scene
+        mesh = bpy.data.meshes.new(_object_name(pattern))
+        obj = bpy.data.objects.new(mesh.name, mesh)
+        collection = context.collection or scene.collection
+        collection.objects.link(obj)
+        material.assign_material(mesh, material.ensure_water_material())
+
+        settings = obj.meniscus
+        # is_surface is set last: until then the parameter update callbacks do not trigger a rebuild per field.
+        settings.file_pattern = _stored_path(pattern.pattern_string(), self.relative_path)
+        settings.particle_radius = self.particle_radius
+        settings.frame_start = first
+        settings.frame_end = last
+        settings.is_surface = True
+
+        if self.use_scene_frame_range:
+            scene.frame_start, scene.frame_end = first, last
+        # The frame handler edits meshes while a render runs; locking the interface keeps the UI from reading them
+        # at the same time (a crash otherwise).
+        scene.render.use_lock_interface = True
+        handlers.ensure_registered()
+        handlers.update_surface(obj, scene, force=True)
+
+        for other in getattr(context, "selected_objects", ()):
+            other.select_set(False)
+        if context.view_layer.objects.get(obj.name) is not None:
+            obj.select_set(True)
+            context.view_layer.objects.active = obj
+
+        status = settings.status.replace(handlers.STATUS_LINE_SEPARATOR, ", ")
+        self.report({"INFO"}, f"Added '{obj.name}': {len(frames)} frames ({first}-{last}). {status}")
+        return {"FINISHED"}
+
+
+class MENISCUS_OT_reload(bpy.types.Operator):
+    """Re-read the particle files and rebuild the surfaces at the current frame (after files changed on disk)"""
+    bl_idname = "meniscus.reload"
+    bl_label = "Reload Surfaces"
+    bl_options = {"REGISTER"}
+
+    all_surfaces: BoolProperty(
+        name="All Surfaces",
+        description="Reload every surface of the scene, not only the selected ones",
+        default=False,
+    )
+
+    def execute(self, context):
+        handlers.forget_cached_state()
+        scene = context.scene
+        if self.all_surfaces:
+            targets = handlers.surface_objects(scene)
+        else:
+            targets = [obj for obj in context.selected_objects if handlers.is_surface(obj)]
+            active = context.active_object
+            if handlers.is_surface(active) and active not in targets:
+                targets.append(active)
+        for obj in targets:
+            handlers.update_surface(obj, scene, force=True)
+        self.report({"INFO"}, f"Reloaded {len(targets)} surface(s)")
+        return {"FINISHED"}
+
+
+class MENISCUS_OT_detect_frame_range(bpy.types.Operator):
+    """Set Start and End of the active surface to the first and last frame found on disk"""
+    bl_idname = "meniscus.detect_frame_range"
+    bl_label = "Detect Frame Range"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return handlers.is_surface(context.active_object)
+
+    def execute(self, context):
+        obj = context.active_object
+        try:
+            frames = handlers.available_frames(obj)
+        except handlers.SurfaceError as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        found = sequence.frame_range(frames)
+        if found is None:
+            self.report({"ERROR"}, "No particle files found")
+            return {"CANCELLED"}
+        settings = obj.meniscus
+        # Paused while both ends change: in between, the range could be empty and each write would rebuild.
+        settings.is_surface = False
+        settings.frame_start, settings.frame_end = found
+        settings.is_surface = True
+        handlers.update_surface(obj, context.scene)
+        self.report({"INFO"}, f"Frames {found[0]}-{found[1]} ({len(frames)} files)")
+        return {"FINISHED"}
+
+
+classes = (MENISCUS_OT_add_sequence, MENISCUS_OT_reload, MENISCUS_OT_detect_frame_range)
+
+
+def menu_import(self, context):
+    self.layout.operator(MENISCUS_OT_add_sequence.bl_idname, text="Meniscus Particle Sequence (.vtk, .bgeo, ...)")
+
+
+def register():
+    for cls in classes:
+        bpy.utils.register_class(cls)
+    bpy.types.TOPBAR_MT_file_import.append(menu_import)
+
+
+def unregister():
+    bpy.types.TOPBAR_MT_file_import.remove(menu_import)
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,60 @@
+"""Animation render: the frame handler runs inside the render job for every frame (and shutter subframe)."""
+import os
+import sys
+import tempfile
+
+import bpy
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import _support  # noqa: E402
+from _support import check  # noqa: E402
+
+meniscus = _support.import_addon()
+meniscus.register()
+_support.clear_scene()
+scene = bpy.context.scene
+surface = _support.add_sample_sequence()
+surface.meniscus.cube_size = 1.0  # coarse and unsmoothed: this test is about the render path, not the surface
+surface.meniscus.smoothing_iterations = 0
+
+
+def test_animation_render_with_motion_blur():
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    scene.collection.objects.link(camera)
+    camera.location = (1.5, -3.5, 2.0)
+    camera.rotation_euler = (np.radians(65), 0.0, 0.0)
+    scene.camera = camera
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = 1
+    scene.cycles.use_denoising = False
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 32, 18, 100
+    scene.render.use_motion_blur = True
+    scene.frame_start, scene.frame_end = 29, 31
+    # What the surface showed when each frame was written (the render restores the scene frame afterwards).
+    shown = []
+
+    def record(_scene, _depsgraph=None):
+        shown.append((surface.meniscus.status.splitlines()[0], len(surface.data.polygons)))
+
+    bpy.app.handlers.render_write.append(record)
+    try:
+        with tempfile.TemporaryDirectory(prefix="meniscus_anim_") as folder:
+            scene.render.filepath = os.path.join(folder, "frame_####")
+            scene.render.image_settings.file_format = "PNG"
+            bpy.ops.render.render(animation=True)
+            written = sorted(os.listdir(folder))
+            check(written == ["frame_0029.png", "frame_0030.png", "frame_0031.png"], written)
+    finally:
+        bpy.app.handlers.render_write.remove(record)
+    files = [name for name, _ in shown]
+    check(files == [f"double_dam_break_00{frame}.vtk" for frame in (29, 30, 31)], f"rendered files: {shown}")
+    check(all(triangles > 0 for _, triangles in shown), f"empty surface in a rendered frame: {shown}")
+    check(not surface.meniscus.status_is_error, surface.meniscus.status)
+
+
+try:
+    _support.run(globals())
+finally:
+    meniscus.unregister()
