@@ -15,7 +15,9 @@ namespace {
 
 bool has_repeated_index(const int32_t* t) { return t[0] == t[1] || t[1] == t[2] || t[2] == t[0]; }
 
-bool zero_area(const float* v, const int32_t* t) {
+}  // namespace
+
+bool triangle_has_zero_area(const float* v, const int32_t* t) {
     const float* a = v + 3 * static_cast<int64_t>(t[0]);
     const float* b = v + 3 * static_cast<int64_t>(t[1]);
     const float* c = v + 3 * static_cast<int64_t>(t[2]);
@@ -24,6 +26,8 @@ bool zero_area(const float* v, const int32_t* t) {
     const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
     return n[0] == 0.0 && n[1] == 0.0 && n[2] == 0.0;
 }
+
+namespace {
 
 // The fan of triangles around v is one disk when its link (edge next(v) -> prev(v) of every triangle) is a
 // single cycle, or a single path at a boundary: every link vertex has at most two link edges and the link graph
@@ -107,7 +111,7 @@ MeshCheck check_mesh(const TriMesh& mesh) {
 #pragma omp parallel for reduction(+ : repeated, zero) schedule(static) num_threads(resolve_threads(threads))
     for (int64_t t = 0; t < nt; ++t) {
         if (has_repeated_index(tris + 3 * t)) ++repeated;
-        else if (zero_area(mesh.vertices.data(), tris + 3 * t)) ++zero;
+        else if (triangle_has_zero_area(mesh.vertices.data(), tris + 3 * t)) ++zero;
     }
 #pragma omp parallel for reduction(+ : non_finite) schedule(static) num_threads(resolve_threads(threads))
     for (int64_t v = 0; v < nv; ++v)

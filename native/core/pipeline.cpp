@@ -100,17 +100,16 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         StageTimer timer(&stats, "smoothing");
         const std::vector<float> smoothing_amount = post.smoothing_weights ? weights : std::vector<float>{};
         int32_t components = 0;
-        std::vector<int32_t> labels;
-        std::vector<double> volumes;
-        if (post.volume_restoration) {
-            labels = component_labels(mesh, &components);
-            volumes = component_volumes(mesh, labels, components);
-        }
+        const std::vector<int32_t> labels = component_labels(mesh, &components);
+        const std::vector<double> volumes = component_volumes(mesh, labels, components);
+        const std::vector<float> before = mesh.vertices;
         laplacian_smooth(mesh, smoothing_amount, post.smoothing_iterations, post.smoothing_beta, threads);
         if (post.volume_restoration) {
             StageTimer restoration_timer(&stats, "volume restoration");
             restore_component_volumes(mesh, labels, volumes, smoothing_amount, options.reconstruction.compact_support(), threads);
         }
+        const std::size_t reverted = revert_collapsed_components(mesh, before, labels, components, volumes);
+        if (reverted) stats.set_count("components_left_unsmoothed", static_cast<double>(reverted));
     }
 
     if (post.normals) {

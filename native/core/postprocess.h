@@ -26,6 +26,8 @@ struct MeshCheck {
     std::string summary() const;  // "closed, manifold, oriented" or what is wrong with counts
 };
 MeshCheck check_mesh(const TriMesh& mesh);
+// Exactly zero area (cross product of the edges, in double, is the zero vector): the check's criterion.
+bool triangle_has_zero_area(const float* vertices, const int32_t* triangle);
 
 // ---- decimation (Sec. 3.3) ------------------------------------------------------------------------------------
 // Removes the "single vertex" and "double vertex" marching-cubes configurations with legal half-edge collapses

@@ -118,16 +118,22 @@ public:
                     for (int iy = 0; iy < ny; ++iy) {
                         const float dyz = s.dz2[iz] + s.dy2[iy];
                         if (dyz >= support_squared) continue;
+                        // The row's points inside the support form one run; bound it (one point of slack either
+                        // side for rounding) and let the mask below decide exactly, as for every point.
+                        const double half_chord = std::sqrt(double(support_squared) - double(dyz));
+                        const int x0 = std::max(0, static_cast<int>(std::ceil((double(x[0]) - half_chord) / cube_) - first[0]) - 1);
+                        const int x1 = std::min(nx - 1, static_cast<int>(std::floor((double(x[0]) + half_chord) / cube_) - first[0]) + 1);
                         float* row = &s.values[point_index(ox, oy + iy, oz + iz)];
-                        for (int ix = 0; ix < nx; ++ix) {
-                            const float d2 = dyz + s.dx2[ix];
-                            if (d2 < support_squared) {
-                                const float q = std::sqrt(d2) * inverse_support;
-                                float shape;
-                                if (q <= 0.5f) shape = 1.0f + q * q * (-6.0f + 6.0f * q);
-                                else { const float a = 1.0f - q; shape = 2.0f * a * a * a; }
-                                row[ix] += factor * shape;
-                            }
+                        const float* dx2 = s.dx2.data();
+                        // Branch-free so that it vectorises: points beyond the support add exactly +0.
+                        for (int ix = x0; ix <= x1; ++ix) {
+                            const float d2 = dyz + dx2[ix];
+                            const float q = std::sqrt(std::min(d2, support_squared)) * inverse_support;
+                            const float a = 1.0f - q;
+                            const float inner = 1.0f + q * q * (-6.0f + 6.0f * q);
+                            const float outer = 2.0f * a * a * a;
+                            const float shape = d2 < support_squared ? (q <= 0.5f ? inner : outer) : 0.0f;
+                            row[ix] += factor * shape;
                         }
                     }
                 }

@@ -107,4 +107,21 @@ void restore_component_volumes(TriMesh& mesh, const std::vector<int32_t>& labels
     mesh.normals = saved_normals;
 }
 
+std::size_t revert_collapsed_components(TriMesh& mesh, const std::vector<float>& before, const std::vector<int32_t>& labels,
+                                        int32_t count, const std::vector<double>& volumes_before) {
+    std::vector<uint8_t> collapsed(static_cast<std::size_t>(count), 0);
+    for (std::size_t t = 0; t < mesh.num_triangles(); ++t)
+        if (triangle_has_zero_area(mesh.vertices.data(), &mesh.triangles[3 * t])) collapsed[labels[mesh.triangles[3 * t]]] = 1;
+    const std::vector<double> volumes = component_volumes(mesh, labels, count);
+    for (int32_t c = 0; c < count; ++c)
+        if (volumes_before[c] != 0.0 && volumes[c] * volumes_before[c] <= 0.0) collapsed[c] = 1;  // turned inside out
+    std::size_t reverted = 0;
+    for (int32_t c = 0; c < count; ++c) reverted += collapsed[c];
+    if (reverted == 0) return 0;
+    for (std::size_t v = 0; v < mesh.num_vertices(); ++v)
+        if (collapsed[labels[v]])
+            for (int k = 0; k < 3; ++k) mesh.vertices[3 * v + k] = before[3 * v + k];
+    return reverted;
+}
+
 }  // namespace meniscus

@@ -23,4 +23,10 @@ std::vector<double> component_volumes(const TriMesh& mesh, const std::vector<int
 void restore_component_volumes(TriMesh& mesh, const std::vector<int32_t>& labels, const std::vector<double>& target,
                                const std::vector<float>& amount, double max_offset, int threads);
 
+// Smoothing may collapse a component smaller than a few cubes (a blob around one grid point) into a point or a
+// line. Such a component gets its positions from `before` back: smoothing never leaves a degenerate triangle or
+// an inverted component. Returns the number of components reverted.
+std::size_t revert_collapsed_components(TriMesh& mesh, const std::vector<float>& before, const std::vector<int32_t>& labels,
+                                        int32_t count, const std::vector<double>& volumes_before);
+
 }  // namespace meniscus

@@ -74,3 +74,15 @@ def test_inspect_reports_quality(cli, shared, tmp_path):
     assert 0.97 < report["volume_ratio"] < 1.03
     assert report["bumpiness_ratio"] < 0.5
     assert "bumpiness" in result.stdout
+
+
+def test_every_frame_of_the_shared_sequence_passes_the_mesh_check(cli, shared, tmp_path):
+    """The full default pipeline on all 61 frames of the double dam break (spray, sheets, settling pool)."""
+    stats = tmp_path / "stats.json"
+    result = run(cli, "reconstruct", shared / "sequence/double_dam_break_{}.vtk", "-o", tmp_path / "s_{}.ply", "-r", 0.025,
+                 "-c", 0.75, "--check-mesh", "--stats", stats, "-q")
+    report = json.loads(stats.read_text())
+    assert len(report["frames"]) == 61
+    failed = [(f["frame"], f.get("failed")) for f in report["frames"] if f.get("failed")]
+    assert not failed and result.returncode == 0, (failed, result.stderr[-2000:])
+    assert all(f["check"]["ok"] for f in report["frames"])
