@@ -41,8 +41,15 @@ bool normalise_into(const double n[3], float* out) {
 
 void compute_area_weighted_normals(TriMesh& mesh, int threads) {
     validate_mesh_arrays(mesh, "compute_area_weighted_normals");
+    MeshAdjacency adjacency;
+    adjacency.vertex_triangles = build_vertex_triangles(mesh, threads);
+    compute_area_weighted_normals(mesh, adjacency, threads);
+}
+
+void compute_area_weighted_normals(TriMesh& mesh, const MeshAdjacency& adjacency, int threads) {
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
-    const CsrList vt = build_vertex_triangles(mesh, threads);
+    const CsrList& vt = adjacency.vertex_triangles;
+    if (vt.rows() != mesh.num_vertices()) throw InputError("compute_area_weighted_normals: the adjacency does not belong to this mesh");
     std::vector<float> normals(mesh.vertices.size());
     parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t v = begin; v < end; ++v) {
@@ -69,13 +76,20 @@ void compute_area_weighted_normals(TriMesh& mesh, int threads) {
 void smooth_normals(TriMesh& mesh, int iterations, int threads) {
     validate_mesh_arrays(mesh, "smooth_normals");
     if (iterations < 0) throw InputError("smooth_normals: iterations must be >= 0, got " + std::to_string(iterations));
-    if (mesh.normals.empty()) compute_area_weighted_normals(mesh, threads);
+    if (iterations == 0 && !mesh.normals.empty()) return;
+    smooth_normals(mesh, build_adjacency(mesh, threads), iterations, threads);
+}
+
+void smooth_normals(TriMesh& mesh, const MeshAdjacency& adjacency, int iterations, int threads) {
+    if (iterations < 0) throw InputError("smooth_normals: iterations must be >= 0, got " + std::to_string(iterations));
+    if (mesh.normals.empty()) compute_area_weighted_normals(mesh, adjacency, threads);
     for (std::size_t i = 0; i < mesh.normals.size(); ++i)
         if (!std::isfinite(mesh.normals[i]))
             throw InputError("smooth_normals: normal of vertex " + std::to_string(i / 3) + " is not finite");
     if (iterations == 0) return;
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
-    const CsrList neighbours = build_adjacency(mesh, threads).vertex_neighbours;
+    const CsrList& neighbours = adjacency.vertex_neighbours;
+    if (neighbours.rows() != mesh.num_vertices()) throw InputError("smooth_normals: the adjacency does not belong to this mesh");
     std::vector<float> other(mesh.normals.size());
     for (int it = 0; it < iterations; ++it) {
         const float* in = mesh.normals.data();

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "errors.h"
+#include "mesh_adjacency.h"
 #include "parallel.h"
 #include "postprocess.h"
 #include "reconstruction.h"
@@ -87,6 +88,11 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         stats.set_count("decimated_configurations", static_cast<double>(removed));
     }
 
+    // From here on the topology stays as it is: one adjacency serves smoothing, restoration and normals.
+    StageTimer adjacency_timer(&stats, "adjacency");
+    const MeshAdjacency adjacency = build_adjacency(mesh, threads);
+    adjacency_timer.stop();
+
     std::vector<float> weights;
     const bool need_weights = (post.smoothing_iterations > 0 && post.smoothing_weights) || post.output_weights;
     if (need_weights) {
@@ -103,10 +109,11 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         const std::vector<int32_t> labels = component_labels(mesh, &components);
         const std::vector<double> volumes = component_volumes(mesh, labels, components);
         const std::vector<float> before = mesh.vertices;
-        laplacian_smooth(mesh, smoothing_amount, post.smoothing_iterations, post.smoothing_beta, threads);
+        laplacian_smooth(mesh, adjacency, smoothing_amount, post.smoothing_iterations, post.smoothing_beta, threads);
+        timer.stop();
         if (post.volume_restoration) {
             StageTimer restoration_timer(&stats, "volume restoration");
-            restore_component_volumes(mesh, labels, volumes, smoothing_amount, options.reconstruction.compact_support(), threads);
+            restore_component_volumes(mesh, adjacency, labels, volumes, smoothing_amount, options.reconstruction.compact_support(), threads);
         }
         const std::size_t reverted = revert_collapsed_components(mesh, before, labels, components, volumes);
         if (reverted) stats.set_count("components_left_unsmoothed", static_cast<double>(reverted));
@@ -117,8 +124,8 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         if (post.sph_normals) {
             mesh.normals = colour_field_normals(r, mesh.vertices, threads);
         } else {
-            compute_area_weighted_normals(mesh, threads);
-            if (post.normal_smoothing_iterations > 0) smooth_normals(mesh, post.normal_smoothing_iterations, threads);
+            compute_area_weighted_normals(mesh, adjacency, threads);
+            if (post.normal_smoothing_iterations > 0) smooth_normals(mesh, adjacency, post.normal_smoothing_iterations, threads);
         }
     } else {
         mesh.normals.clear();

@@ -10,6 +10,8 @@
 
 namespace meniscus {
 
+struct MeshAdjacency;  // mesh_adjacency.h: built once when the topology stops changing, shared by later stages
+
 // ---- topology -------------------------------------------------------------------------------------------------
 struct MeshCheck {
     std::size_t boundary_edges = 0;          // edges with one incident triangle
@@ -47,10 +49,14 @@ std::size_t mesh_cleanup(TriMesh& mesh, double cube_edge, double snap_distance, 
 // Weighted explicit uniform-Laplacian smoothing with a Jacobi update: x_i += beta * w_i * (mean(x_j) - x_i).
 // weights: one per vertex in [0, 1]; empty means 1 everywhere (plain uniform smoothing).
 void laplacian_smooth(TriMesh& mesh, const std::vector<float>& weights, int iterations, double beta, int threads);
+void laplacian_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& weights, int iterations, double beta,
+                      int threads);
 
 // ---- normals (Sec. 3.4) ---------------------------------------------------------------------------------------
 void compute_area_weighted_normals(TriMesh& mesh, int threads);   // fills mesh.normals
 void smooth_normals(TriMesh& mesh, int iterations, int threads);  // Eq. 12 on mesh.normals
+void compute_area_weighted_normals(TriMesh& mesh, const MeshAdjacency& adjacency, int threads);
+void smooth_normals(TriMesh& mesh, const MeshAdjacency& adjacency, int iterations, int threads);
 
 // ---- quality report -------------------------------------------------------------------------------------------
 struct ComponentQuality {

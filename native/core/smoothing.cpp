@@ -11,6 +11,16 @@ namespace meniscus {
 
 void laplacian_smooth(TriMesh& mesh, const std::vector<float>& weights, int iterations, double beta, int threads) {
     validate_mesh_arrays(mesh, "laplacian_smooth");
+    if (iterations <= 0 || mesh.num_vertices() == 0) {
+        laplacian_smooth(mesh, MeshAdjacency{}, weights, iterations, beta, threads);
+        return;
+    }
+    laplacian_smooth(mesh, build_adjacency(mesh, threads), weights, iterations, beta, threads);
+}
+
+void laplacian_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& weights, int iterations, double beta,
+                      int threads) {
+    validate_mesh_arrays(mesh, "laplacian_smooth");
     const std::size_t nv = mesh.num_vertices();
     if (iterations < 0) throw InputError("laplacian_smooth: iterations must be >= 0, got " + std::to_string(iterations));
     if (!(beta >= 0.0 && beta <= 1.0))
@@ -36,7 +46,8 @@ void laplacian_smooth(TriMesh& mesh, const std::vector<float>& weights, int iter
         }
         w = clamped.data();
     }
-    const CsrList neighbours = build_adjacency(mesh, threads).vertex_neighbours;
+    const CsrList& neighbours = adjacency.vertex_neighbours;
+    if (neighbours.rows() != nv) throw InputError("laplacian_smooth: the adjacency does not belong to this mesh");
     // Jacobi: every vertex reads the previous iterate only, so the result is independent of the vertex order and
     // of the thread count (bit for bit: each vertex's arithmetic is the same sequence of operations).
     std::vector<float> other(mesh.vertices.size());

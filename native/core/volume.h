@@ -20,8 +20,9 @@ std::vector<double> component_volumes(const TriMesh& mesh, const std::vector<int
 
 // Moves vertices along their area-weighted normals by s_c * amount_i so that component c's volume returns to
 // target[c]; amount empty means 1 everywhere. |s_c| is capped at max_offset. A few Newton steps.
-void restore_component_volumes(TriMesh& mesh, const std::vector<int32_t>& labels, const std::vector<double>& target,
-                               const std::vector<float>& amount, double max_offset, int threads);
+struct MeshAdjacency;
+void restore_component_volumes(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<int32_t>& labels,
+                               const std::vector<double>& target, const std::vector<float>& amount, double max_offset, int threads);
 
 // Smoothing may collapse a component smaller than a few cubes (a blob around one grid point) into a point or a
 // line. Such a component gets its positions from `before` back: smoothing never leaves a degenerate triangle or
