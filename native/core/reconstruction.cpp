@@ -55,6 +55,7 @@ uint32_t edge_key(int x, int y, int z, int axis) { return ((uint32_t(z) * kBrick
 struct Scratch {
     std::vector<float> values = std::vector<float>(kBrickPoints * kBrickPoints * kBrickPoints);
     std::vector<int32_t> edge_vertex = std::vector<int32_t>(kBrick * kBrick * kBrick * 3);
+    std::vector<uint8_t> row_state = std::vector<uint8_t>(kBrickPoints * kBrickPoints);
     std::vector<float> dx2, dy2, dz2;
 };
 
@@ -118,21 +119,16 @@ public:
                     for (int iy = 0; iy < ny; ++iy) {
                         const float dyz = s.dz2[iz] + s.dy2[iy];
                         if (dyz >= support_squared) continue;
-                        // The row's points inside the support form one run; bound it (one point of slack either
-                        // side for rounding) and let the mask below decide exactly, as for every point.
-                        const double half_chord = std::sqrt(double(support_squared) - double(dyz));
-                        const int x0 = std::max(0, static_cast<int>(std::ceil((double(x[0]) - half_chord) / cube_) - first[0]) - 1);
-                        const int x1 = std::min(nx - 1, static_cast<int>(std::floor((double(x[0]) + half_chord) / cube_) - first[0]) + 1);
                         float* row = &s.values[point_index(ox, oy + iy, oz + iz)];
                         const float* dx2 = s.dx2.data();
-                        // Branch-free so that it vectorises: points beyond the support add exactly +0.
-                        for (int ix = x0; ix <= x1; ++ix) {
-                            const float d2 = dyz + dx2[ix];
-                            const float q = std::sqrt(std::min(d2, support_squared)) * inverse_support;
-                            const float a = 1.0f - q;
-                            const float inner = 1.0f + q * q * (-6.0f + 6.0f * q);
-                            const float outer = 2.0f * a * a * a;
-                            const float shape = d2 < support_squared ? (q <= 0.5f ? inner : outer) : 0.0f;
+                        // Branch-free so that it vectorises: with a = max(1 - q, 0) and b = max(1 - 2q, 0) the
+                        // cubic spline is 2a^3 - b^3 on all of [0, 1] and exactly 0 beyond the support.
+                        for (int ix = 0; ix < nx; ++ix) {
+                            const float q = std::sqrt(dyz + dx2[ix]) * inverse_support;
+                            float a = 1.0f - q, b = 1.0f - 2.0f * q;
+                            a = a > 0.0f ? a : 0.0f;
+                            b = b > 0.0f ? b : 0.0f;
+                            const float shape = 2.0f * a * a * a - b * b * b;
                             row[ix] += factor * shape;
                         }
                     }
@@ -176,9 +172,33 @@ private:
         for (int k = 0; k < 3; ++k) position[k] = static_cast<float>((double(g[k]) + (k == axis ? fraction : 0.0)) * cube_);
     }
 
+    // Rows of points along x, classified once: most rows lie wholly inside or outside, and a row of cubes (or of
+    // edges) whose bounding point rows agree that way has nothing to mesh.
+    enum RowState : uint8_t { kRowOutside = 0, kRowInside = 1, kRowMixed = 2 };
+    void classify_rows(Scratch& s) const {
+        for (int z = 0; z < kBrickPoints; ++z)
+            for (int y = 0; y < kBrickPoints; ++y) {
+                const float* row = &s.values[point_index(0, y, z)];
+                int inside = 0;
+                for (int x = 0; x < kBrickPoints; ++x) inside += row[x] > threshold_;
+                s.row_state[z * kBrickPoints + y] = inside == 0 ? kRowOutside : inside == kBrickPoints ? kRowInside : kRowMixed;
+            }
+    }
+    bool rows_uniform(const Scratch& s, int y, int z, bool cube_row) const {
+        const uint8_t first = s.row_state[z * kBrickPoints + y];
+        if (first == kRowMixed) return false;
+        const bool same = s.row_state[z * kBrickPoints + y + 1] == first && s.row_state[(z + 1) * kBrickPoints + y] == first;
+        return same && (!cube_row || s.row_state[(z + 1) * kBrickPoints + y + 1] == first);
+    }
+
     void create_vertices(const Coords& base, Scratch& s, BrickMesh& out) const {
+        classify_rows(s);
         for (int z = 0; z < kBrick; ++z)
-            for (int y = 0; y < kBrick; ++y)
+            for (int y = 0; y < kBrick; ++y) {
+                if (rows_uniform(s, y, z, false)) {
+                    std::fill_n(&s.edge_vertex[edge_key(0, y, z, 0)], 3 * kBrick, -1);
+                    continue;
+                }
                 for (int x = 0; x < kBrick; ++x) {
                     const float a = s.values[point_index(x, y, z)];
                     const bool a_in = a > threshold_;
@@ -197,6 +217,7 @@ private:
                         if (x == 0 || y == 0 || z == 0) out.border.emplace_back(key, index);
                     }
                 }
+            }
     }
 
     void create_triangles(const Coords& brick, Scratch& s, BrickMesh& out) const {
@@ -204,7 +225,8 @@ private:
         const auto& edges = mc::edges();
         float corner[8];
         for (int z = 0; z < kBrick; ++z)
-            for (int y = 0; y < kBrick; ++y)
+            for (int y = 0; y < kBrick; ++y) {
+                if (rows_uniform(s, y, z, true)) continue;
                 for (int x = 0; x < kBrick; ++x) {
                     unsigned inside = 0;
                     for (int c = 0; c < 8; ++c) {
@@ -255,6 +277,7 @@ private:
                         }
                     }
                 }
+            }
         std::sort(out.border.begin(), out.border.end());
     }
 
