@@ -68,13 +68,14 @@ void restore_component_volumes(TriMesh& mesh, const MeshAdjacency& adjacency, co
     if (count == 0 || mesh.num_triangles() == 0) return;
     const std::vector<float> saved_normals = mesh.normals;
     std::vector<double> applied(static_cast<std::size_t>(count), 0.0);
+    // Smoothed normals: offsets along raw vertex normals would print the triangulation's noise back in. The offsets
+    // are small against the features, so the directions computed once serve both Newton steps.
+    compute_area_weighted_normals(mesh, adjacency, threads);
+    smooth_normals(mesh, adjacency, 10, threads);
     // Volume is close to linear in the offset for offsets small against the feature size: two Newton steps
     // bring it within a small fraction of a percent.
     for (int step = 0; step < 2; ++step) {
         const std::vector<double> volume = component_volumes(mesh, labels, count);
-        // Smoothed normals: offsets along raw vertex normals would print the triangulation's noise back in.
-        compute_area_weighted_normals(mesh, adjacency, threads);
-        smooth_normals(mesh, adjacency, 10, threads);
         // d volume / d s = sum_i amount_i * A_i, with A_i a third of the incident triangle areas.
         std::vector<double> rate(static_cast<std::size_t>(count), 0.0);
         for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
