@@ -5,7 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 packages=(build-essential cmake pybind11-dev catch2 libcli11-dev nlohmann-json3-dev zlib1g-dev python3-dev python3-numpy
-          python3-pytest blender xvfb)
+          python3-pytest python3-venv blender xvfb)
 missing=()
 for package in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" || missing+=("$package")

@@ -10,6 +10,12 @@ echo "== C++ tests (ctest)"
 echo "== Python tests (pytest)"
 /usr/bin/python3 -m pytest -q tests/python
 
-echo "== Blender tests (headless)"
+echo "== Blender tests (headless, Debian's Blender)"
 bash tests/blender/run_all.sh build/addon
+
+echo "== Blender tests (bpy 4.5 LTS from PyPI)"
+# A venv on top of Debian's Python (numpy, pytest) with the bpy wheel; created and filled once.
+[ -x build/venv-bpy/bin/python ] || /usr/bin/python3 -m venv --system-site-packages build/venv-bpy
+build/venv-bpy/bin/python -c "import bpy" 2>/dev/null || build/venv-bpy/bin/pip install -q 'bpy==4.5.*'
+bash tests/blender/run_bpy.sh build/addon
 echo "all tests passed"

@@ -1,9 +1,13 @@
-"""Shared helpers of the headless Blender tests (not a test itself: the runner only runs test_*.py).
+"""Shared helpers of the headless Blender tests (not a test itself: the runners only run test_*.py).
 
-Each test script runs in its own Blender process:
+Each test script runs in its own process, either inside a Blender executable or as plain Python with the `bpy`
+module from PyPI (tests/blender/run_all.sh and run_bpy.sh):
     blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_x.py -- --addon-path build/addon
-runs its test_* functions in order, prints one line per test, and raises at the end if any failed so that
---python-exit-code turns the failure into a non-zero exit status.
+    build/venv-bpy/bin/python tests/blender/test_x.py -- --addon-path build/addon
+It runs its test_* functions in order and prints one line per test and a summary. Inside Blender a failure raises
+at the end, which --python-exit-code turns into exit status 1. As a bpy module the process ends with os._exit:
+some bpy wheels crash while tearing down at interpreter exit, after every result was printed, which would turn a
+pass into a crash; the verdict is decided before that and flushed first.
 """
 import argparse
 import os
@@ -20,6 +24,12 @@ SAMPLE_DIR = REPO / "blend_samples" / "double_dam_break"
 SAMPLE_PATTERN = str(SAMPLE_DIR / "double_dam_break_####.vtk")
 SAMPLE_FIRST, SAMPLE_LAST = 20, 39
 SAMPLE_RADIUS = 0.025
+# The bpy module has no executable of its own; inside Blender binary_path names the blender program.
+AS_MODULE = not bpy.app.binary_path
+
+if AS_MODULE:
+    # What --factory-startup does for the executable: no user preferences or startup file influence the tests.
+    bpy.ops.wm.read_factory_settings(use_empty=False)
 
 
 def script_arguments():
@@ -91,8 +101,25 @@ def check(condition, message):
         raise AssertionError(message)
 
 
-def run(namespace):
-    """Runs the test_* functions of a module namespace in definition order; raises if any failed."""
+def run(namespace, cleanup=None):
+    """Runs the test_* functions of a module namespace in definition order, then cleanup(); fails the process if
+    any test failed (raises inside Blender, exits with status 1 as a bpy module). Never returns as a module."""
+    try:
+        failures = _run_tests(namespace)
+        if cleanup is not None:
+            cleanup()
+    except BaseException:
+        traceback.print_exc()
+        failures = ["(cleanup)"]
+    if AS_MODULE:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(1 if failures else 0)
+    if failures:
+        raise AssertionError("failed: " + ", ".join(failures))
+
+
+def _run_tests(namespace):
     tests = [(name, value) for name, value in namespace.items() if name.startswith("test_") and callable(value)]
     failures = []
     for name, test in tests:
@@ -107,5 +134,4 @@ def run(namespace):
             print(f"ok   {name} ({time.perf_counter() - started:.2f} s)")
         sys.stdout.flush()
     print(f"{len(tests) - len(failures)} passed, {len(failures)} failed")
-    if failures:
-        raise AssertionError("failed: " + ", ".join(failures))
+    return failures

@@ -30,6 +30,7 @@ def use_fast_settings(obj):
     settings = obj.meniscus
     settings.is_surface = False  # one rebuild after all fields, not one per field
     settings.cube_size = 1.0
+    settings.render_cube_size = 1.0
     settings.smoothing_iterations = 0
     settings.decimate_barnacles = False
     settings.normal_smoothing_iterations = 0
@@ -301,8 +302,9 @@ def test_render_small_frame():
     check(not surface.meniscus.status_is_error, surface.meniscus.status)
 
 
-try:
-    _support.run(globals())
-finally:
+def _cleanup():
     _temporary.cleanup()
     meniscus.unregister()
+
+
+_support.run(globals(), cleanup=_cleanup)

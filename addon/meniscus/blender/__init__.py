@@ -3,10 +3,10 @@
 Laid out like Blender's own add-ons: properties (data), operators (actions), panels (UI), handlers (frame change),
 plus mesh_update (writing meshes, version differences) and material (the default water material).
 """
-from . import handlers, operators, panels, properties
+from . import bake, handlers, operators, panels, properties
 
 # Registration order matters: panels and operators refer to the properties, handlers use all of them.
-_modules = (properties, operators, panels, handlers)
+_modules = (properties, operators, bake, panels, handlers)
 _registered = False
 
 

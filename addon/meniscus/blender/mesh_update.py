@@ -16,7 +16,8 @@ BLENDER_VERSION = tuple(bpy.app.version)
 POLYGON_LOOP_TOTAL_IS_STORED = BLENDER_VERSION < (4, 0, 0)
 CUSTOM_NORMALS_NEED_AUTO_SMOOTH = BLENDER_VERSION < (4, 1, 0)
 
-VELOCITY_ATTRIBUTE = "velocity"  # the name Cycles reads for motion blur of meshes whose topology changes
+VELOCITY_ATTRIBUTE = "velocity"
+RESERVED_NAME_PREFIX = "particle_"  # 'id' becomes 'particle_id': Blender reserves 'id' for integer stable IDs  # the name Cycles reads for motion blur of meshes whose topology changes
 
 
 def _flat(array, dtype):
@@ -31,11 +32,13 @@ def clear_surface(mesh):
     mesh.update()
 
 
-def write_surface(mesh, vertices, triangles, normals=None, point_vectors=None):
+def write_surface(mesh, vertices, triangles, normals=None, point_attributes=None):
     """Replaces the mesh's geometry by a triangle mesh.
 
     vertices (V, 3) and triangles (F, 3) index arrays; normals (V, 3) unit vectors used as custom normals when
-    given; point_vectors maps attribute names to (V, 3) arrays stored as FLOAT_VECTOR point attributes.
+    given; point_attributes maps names to (V,) arrays (FLOAT point attributes, e.g. 'weights') or (V, 3) arrays
+    (FLOAT_VECTOR, e.g. 'velocity'); other shapes are skipped. clear_geometry() drops the attributes of the
+    previous frame, so an attribute that is no longer produced does not linger with stale values.
     """
     vertex_count = len(vertices)
     triangle_count = len(triangles)
@@ -56,8 +59,8 @@ def write_surface(mesh, vertices, triangles, normals=None, point_vectors=None):
     mesh.polygons.foreach_set("use_smooth", np.ones(triangle_count, dtype=bool))
     mesh.update(calc_edges=True)
 
-    for name, values in (point_vectors or {}).items():
-        _write_point_vectors(mesh, name, values)
+    for name, values in (point_attributes or {}).items():
+        _write_point_attribute(mesh, name, values, vertex_count)
 
     if normals is not None and len(normals) == vertex_count:
         if CUSTOM_NORMALS_NEED_AUTO_SMOOTH:
@@ -70,14 +73,34 @@ def write_surface(mesh, vertices, triangles, normals=None, point_vectors=None):
         mesh.use_auto_smooth = False
 
 
-def _write_point_vectors(mesh, name, values):
+# Attribute layout by value shape: (data type, the RNA property foreach_set writes).
+_ATTRIBUTE_KINDS = {1: ("FLOAT", "value"), 3: ("FLOAT_VECTOR", "vector")}
+
+
+def _write_point_attribute(mesh, name, values, vertex_count):
+    values = np.asarray(values)
+    if len(values) != vertex_count:
+        return
+    width = 1 if values.ndim == 1 else int(np.prod(values.shape[1:]))
+    kind = _ATTRIBUTE_KINDS.get(width)
+    # Names Blender reserves for its own layers ('position', '.select_vert', ...) cannot be created: skip them.
+    if kind is None or name.startswith(".") or name == "position":
+        return
+    data_type, rna_property = kind
     attribute = mesh.attributes.get(name)
-    if attribute is not None and (attribute.domain != "POINT" or attribute.data_type != "FLOAT_VECTOR"):
+    if attribute is not None and (attribute.domain != "POINT" or attribute.data_type != data_type):
         mesh.attributes.remove(attribute)
         attribute = None
     if attribute is None:
-        attribute = mesh.attributes.new(name=name, type="FLOAT_VECTOR", domain="POINT")
-    attribute.data.foreach_set("vector", _flat(values, np.float32))
+        attribute = mesh.attributes.new(name=name, type=data_type, domain="POINT")
+    if attribute is None:
+        # Blender reserves some names for its own meaning and type ('id' must be an integer stable ID in geometry
+        # nodes); the particle attribute of that name is kept under a prefixed name instead.
+        name = RESERVED_NAME_PREFIX + name
+        attribute = mesh.attributes.get(name) or mesh.attributes.new(name=name, type=data_type, domain="POINT")
+        if attribute is None or attribute.data_type != data_type:
+            return
+    attribute.data.foreach_set(rna_property, _flat(values, np.float32))
 
 
 def read_vertices(mesh):
@@ -103,6 +126,16 @@ def read_corner_normals(mesh):
         mesh.calc_normals_split()
         mesh.loops.foreach_get("normal", normals)
     return normals.reshape(-1, 3)
+
+
+def read_point_values(mesh, name):
+    """(V,) float32 values of a FLOAT point attribute, or None when the mesh has no such attribute."""
+    attribute = mesh.attributes.get(name)
+    if attribute is None:
+        return None
+    values = np.empty(len(mesh.vertices), dtype=np.float32)
+    attribute.data.foreach_get("value", values)
+    return values
 
 
 def read_point_vectors(mesh, name):

@@ -164,7 +164,54 @@ class MENISCUS_OT_detect_frame_range(bpy.types.Operator):
         return {"FINISHED"}
 
 
-classes = (MENISCUS_OT_add_sequence, MENISCUS_OT_reload, MENISCUS_OT_detect_frame_range)
+class MENISCUS_OT_add_object_surface(bpy.types.Operator):
+    """Add a fluid surface around the particles of the active object (its particle systems, point cloud points or
+    mesh vertices), rebuilt as the object changes: surfaces a simulation made in Blender"""
+    bl_idname = "meniscus.add_object_surface"
+    bl_label = "Surface From Object"
+    bl_options = {"REGISTER", "UNDO"}
+
+    source_name: StringProperty(name="Source", description="Object to surface (default: the active object)")
+    particle_radius: FloatProperty(
+        name="Particle Radius",
+        description="Radius of one particle in scene units; the other lengths are multiples of it",
+        default=0.025, min=1e-6, soft_min=1e-4, soft_max=1.0, precision=4, step=0.1, subtype="DISTANCE", unit="LENGTH",
+    )
+
+    @classmethod
+    def poll(cls, context):
+        obj = context.active_object
+        return obj is not None and obj.type in {"MESH", "POINTCLOUD"} and not handlers.is_surface(obj)
+
+    def execute(self, context):
+        source = bpy.data.objects.get(self.source_name) if self.source_name else context.active_object
+        if source is None or source.type not in {"MESH", "POINTCLOUD"}:
+            self.report({"ERROR"}, "Choose a mesh or point cloud object (particle systems live on meshes)")
+            return {"CANCELLED"}
+        scene = context.scene
+        mesh = bpy.data.meshes.new(f"{source.name} Surface")
+        obj = bpy.data.objects.new(mesh.name, mesh)
+        (context.collection or scene.collection).objects.link(obj)
+        material.assign_material(mesh, material.ensure_water_material())
+        settings = obj.meniscus
+        settings.source_type = "OBJECT"
+        settings.source_object = source
+        settings.particle_radius = self.particle_radius
+        settings.is_surface = True
+        scene.render.use_lock_interface = True  # as for file sequences: the handler edits meshes during renders
+        handlers.ensure_registered()
+        handlers.update_surface(obj, scene, force=True)
+        for other in getattr(context, "selected_objects", ()):
+            other.select_set(False)
+        if context.view_layer.objects.get(obj.name) is not None:
+            obj.select_set(True)
+            context.view_layer.objects.active = obj
+        self.report({"INFO"}, f"Added '{obj.name}'")
+        return {"FINISHED"}
+
+
+classes = (MENISCUS_OT_add_sequence, MENISCUS_OT_reload, MENISCUS_OT_detect_frame_range,
+           MENISCUS_OT_add_object_surface)
 
 
 def menu_import(self, context):

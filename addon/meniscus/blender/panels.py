@@ -4,7 +4,7 @@ import textwrap
 import bpy
 
 from .. import sequence
-from . import handlers
+from . import bake, handlers
 
 
 def _wrap_lines(text, context):
@@ -39,7 +39,10 @@ class MENISCUS_PT_main(_SidebarPanel, bpy.types.Panel):
 
     def draw(self, context):
         layout = self.layout
-        layout.operator("meniscus.add_sequence", icon="MOD_FLUIDSIM")
+        row = layout.row(align=True)
+        row.operator("meniscus.add_sequence", text="Add Particles", icon="MOD_FLUIDSIM")
+        row.operator("meniscus.add_cache", text="Add Cache", icon="FILE_CACHE")
+        layout.operator("meniscus.add_object_surface", icon="PARTICLES")
         obj = context.active_object
         if not handlers.is_surface(obj):
             layout.label(text="Select a surface to edit it")
@@ -47,7 +50,8 @@ class MENISCUS_PT_main(_SidebarPanel, bpy.types.Panel):
         settings = obj.meniscus
         row = layout.row(align=True)
         row.label(text=obj.name, icon="OUTLINER_OB_MESH")
-        row.operator("meniscus.reload", text="", icon="FILE_REFRESH")
+        # The re-run button: rebuilds the current frame from scratch (also after files changed on disk).
+        row.operator("meniscus.reload", text="Rebuild", icon="FILE_REFRESH")
         # The status: what the handler did at the last frame (file, particles, triangles, seconds) or the error.
         box = layout.box()
         box.alert = settings.status_is_error
@@ -58,18 +62,24 @@ class MENISCUS_PT_main(_SidebarPanel, bpy.types.Panel):
         for index, line in enumerate(lines):
             icon = ("ERROR" if settings.status_is_error else "INFO") if index == 0 else "BLANK1"
             column.label(text=line, icon=icon)
+        if settings.use_cache:
+            layout.label(text="Playing from cache: parameters apply at the next bake", icon="FILE_CACHE")
         if obj.mode == "EDIT":
             layout.label(text="Not updated while in Edit Mode", icon="EDITMODE_HLT")
 
 
 class MENISCUS_PT_source(_SurfacePanel, bpy.types.Panel):
-    bl_label = "Files"
+    bl_label = "Source"
 
     def draw(self, context):
         layout = self.layout
         # No property split: in a narrow sidebar it cuts the labels down to a few letters.
         obj = context.active_object
         settings = obj.meniscus
+        layout.prop(settings, "source_type", expand=True)
+        if settings.source_type == "OBJECT":
+            layout.prop(settings, "source_object", text="Object")
+            return
         layout.prop(settings, "file_pattern", text="Files")
 
         col = layout.column(align=True)
@@ -92,33 +102,125 @@ class MENISCUS_PT_source(_SurfacePanel, bpy.types.Panel):
         row.operator("meniscus.detect_frame_range", text="", icon="PREVIEW_RANGE")
 
 
-class MENISCUS_PT_reconstruction(_SurfacePanel, bpy.types.Panel):
-    bl_label = "Reconstruction"
+class MENISCUS_PT_cache(_SurfacePanel, bpy.types.Panel):
+    bl_label = "Bake & Cache"
+    bl_options = {"DEFAULT_CLOSED"}
 
     def draw(self, context):
         layout = self.layout
-        # No property split: in a narrow sidebar it cuts the labels down to a few letters.
+        obj = context.active_object
+        settings = obj.meniscus
+        layout.prop(settings, "cache_pattern", text="Cache")
+        if not settings.cache_pattern:
+            layout.label(text="Default: " + handlers.cache_pattern_string(obj), icon="BLANK1")
+        layout.prop(settings, "cache_format", text="Format")
+        job = bake.job_for(obj)
+        if job is not None:
+            text = f"Baking {job.completed}/{job.total}"
+            if hasattr(layout, "progress"):  # 4.0+: a real progress bar in the panel
+                layout.progress(factor=job.progress, type="BAR", text=text)
+            else:
+                layout.label(text=text, icon="TIME")
+            layout.operator("meniscus.bake_cancel", text="Cancel", icon="CANCEL").object_name = obj.name
+        else:
+            row = layout.row()
+            row.enabled = settings.source_type == "FILES"
+            row.operator("meniscus.bake", text="Bake Frame Range", icon="RENDER_ANIMATION").object_name = obj.name
+        layout.prop(settings, "use_cache")
+
+
+class MENISCUS_PT_reconstruction(_SurfacePanel, bpy.types.Panel):
+    bl_label = "Surface"
+
+    def draw(self, context):
+        layout = self.layout
         settings = context.active_object.meniscus
         layout.prop(settings, "particle_radius")
         layout.prop(settings, "smoothing_length")
-        layout.prop(settings, "cube_size")
+        col = layout.column(align=True)
+        col.prop(settings, "cube_size")
+        col.prop(settings, "render_cube_size")
         layout.prop(settings, "iso_threshold")
 
 
-class MENISCUS_PT_postprocessing(_SurfacePanel, bpy.types.Panel):
-    bl_label = "Post-processing"
+class MENISCUS_PT_smoothing(_SurfacePanel, bpy.types.Panel):
+    bl_label = "Smoothing"
 
     def draw(self, context):
         layout = self.layout
-        # No property split: in a narrow sidebar it cuts the labels down to a few letters.
         settings = context.active_object.meniscus
         layout.prop(settings, "smoothing_iterations")
+        col = layout.column()
+        col.active = settings.smoothing_iterations > 0
+        col.prop(settings, "smoothing_strength")
+        col.prop(settings, "use_feature_weights")
+        sub = col.column()
+        sub.active = settings.use_feature_weights or settings.output_weights
+        sub.prop(settings, "weights_normalization_auto")
+        row = sub.row()
+        row.active = not settings.weights_normalization_auto
+        row.prop(settings, "weights_normalization")
+        col.prop(settings, "volume_restoration")
+
+
+class MENISCUS_PT_mesh(_SurfacePanel, bpy.types.Panel):
+    bl_label = "Mesh Cleanup"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        settings = context.active_object.meniscus
         layout.prop(settings, "decimate_barnacles")
-        layout.prop(settings, "normal_smoothing_iterations")
+        layout.prop(settings, "mesh_cleanup")
+        col = layout.column()
+        col.active = settings.mesh_cleanup
+        col.prop(settings, "use_snap_distance")
+        row = col.row()
+        row.active = settings.use_snap_distance
+        row.prop(settings, "mesh_cleanup_snap_distance")
+
+
+class MENISCUS_PT_normals(_SurfacePanel, bpy.types.Panel):
+    bl_label = "Normals"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        settings = context.active_object.meniscus
         layout.prop(settings, "use_custom_normals")
+        col = layout.column()
+        col.active = settings.use_custom_normals
+        col.prop(settings, "normal_smoothing_iterations")
+        col.prop(settings, "sph_normals")
 
 
-classes = (MENISCUS_PT_main, MENISCUS_PT_source, MENISCUS_PT_reconstruction, MENISCUS_PT_postprocessing)
+class MENISCUS_PT_attributes(_SurfacePanel, bpy.types.Panel):
+    bl_label = "Attributes"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        settings = context.active_object.meniscus
+        layout.prop(settings, "output_weights")
+        layout.prop(settings, "attribute_names")
+        layout.label(text="Read them with an Attribute node", icon="NODE")
+
+
+class MENISCUS_PT_performance(_SurfacePanel, bpy.types.Panel):
+    bl_label = "Performance"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        settings = context.active_object.meniscus
+        layout.prop(settings, "threads")
+        layout.prop(settings, "memory_budget_mb")
+        layout.prop(settings, "use_custom_normals", text="Custom Normals (slower playback)")
+
+
+classes = (MENISCUS_PT_main, MENISCUS_PT_source, MENISCUS_PT_cache, MENISCUS_PT_reconstruction,
+           MENISCUS_PT_smoothing, MENISCUS_PT_mesh, MENISCUS_PT_normals, MENISCUS_PT_attributes,
+           MENISCUS_PT_performance)
 
 
 def register():
