@@ -10,10 +10,15 @@
 namespace meniscus {
 
 // Reads a particle file; the format is chosen by content (magic bytes / header), falling back to the extension.
-// Supported: legacy VTK (ASCII and binary big-endian; UNSTRUCTURED_GRID and POLYDATA; float and double; POINT_DATA
-// SCALARS / VECTORS / FIELD arrays), BGEO v5 (Partio layout, gzip-compressed or plain).
+// Supported (details and variants in docs/formats.md): legacy VTK (ASCII and binary big-endian; UNSTRUCTURED_GRID and
+// POLYDATA; POINT_DATA SCALARS / VECTORS / FIELD arrays), VTK XML .vtu / .vtp (ascii, base64, appended raw or base64,
+// zlib, either byte order), BGEO v5 (Partio layout), Houdini JSON geometry (binary .bgeo, ASCII .geo), PLY (ASCII
+// and binary vertex properties), raw float32 or text .xyz, NumPy .npy / .npz, CSV with an x, y, z header; any of
+// them gzip-compressed. Not supported, with a message naming the variant: Houdini .sc (Blosc), classic ASCII
+// PGEOMETRY, parallel .pvtu, non-zlib VTK compressors, pickled .npy.
 // Attributes become float32 arrays (ints converted), named as in the file. Legacy VTK "long" is read as 8 bytes (as
-// VTK writes it on 64-bit Unix). gzip output is capped at 64x the compressed size + 64 MiB (see io_util.h).
+// VTK writes it on 64-bit Unix). Decompression (gzip, VTK zlib blocks, .npz members) is capped at 64x the compressed
+// size + 64 MiB (see io_util.h).
 ParticleData read_particles(const std::string& path);
 
 // Writes a mesh; the format follows the extension: .ply (binary little-endian, with normals and every vertex

@@ -35,11 +35,11 @@ const char* bgeo_type_name(int type) {
 ParticleData read_bgeo_particles(const Source& source) {
     Cursor c(source);
     auto unsupported = [&](const std::string& what) {
-        c.fail("unsupported BGEO variant: " + what + "; only the classic 'BgeoV' version 5 format (as written by "
-               "Partio or Houdini's .bhclassic) is supported");
+        c.fail("unsupported BGEO variant: " + what + "; supported are the classic 'BgeoV' version 5 format (as written "
+               "by Partio or Houdini's .bhclassic) and Houdini's JSON geometry (binary 0x7f 'NSJb' .bgeo, ASCII .geo)");
     };
     if (c.remaining() >= 4 && std::memcmp(c.here(), "\x7fNSJ", 4) == 0)
-        unsupported("new binary JSON geometry (Houdini 12 and later)");
+        unsupported("a binary JSON header that is neither 'NSJb' nor 'bJSN'");
     if (c.remaining() >= 9 && std::memcmp(c.here(), "PGEOMETRY", 9) == 0) unsupported("ASCII .geo file");
     const unsigned char* magic = c.take(4, "BGEO magic");
     if (std::memcmp(magic, "Bgeo", 4) != 0) c.fail("not a BGEO file: it does not start with 'Bgeo'");

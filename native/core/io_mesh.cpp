@@ -301,11 +301,17 @@ struct Column {
 
 class PlyReader {
 public:
-    explicit PlyReader(const Source& source) : c_(source) {}
+    // particles: read the vertex element only as particles (faces and other elements are checked and skipped;
+    // nx ny nz stay an attribute "normal" rather than becoming mesh normals).
+    explicit PlyReader(const Source& source, bool particles = false) : c_(source), particles_(particles) {}
 
     TriMesh read() {
         read_header();
         for (const auto& element : elements_) read_element(element);
+        if (particles_) {
+            if (!have_vertex_element_) c_.fail("no vertex element: a PLY particle file needs 'element vertex N' with x, y, z");
+            return std::move(mesh_);
+        }
         const std::size_t nv = mesh_.num_vertices();
         for (std::size_t i = 0; i < mesh_.triangles.size(); ++i)
             if (mesh_.triangles[i] < 0 || static_cast<std::size_t>(mesh_.triangles[i]) >= nv)
@@ -316,6 +322,8 @@ public:
 
 private:
     Cursor c_;
+    bool particles_ = false;
+    bool have_vertex_element_ = false;
     enum class Format { ascii, binary_le, binary_be } format_ = Format::ascii;
     std::vector<PlyElement> elements_;
     TriMesh mesh_;
@@ -421,11 +429,13 @@ private:
     }
 
     void read_element(const PlyElement& element) {
+        if (element.name == "vertex" && particles_ && element.properties.empty())
+            c_.fail("the vertex element has no x, y and z properties");
         if (element.properties.empty()) return;  // no data at all, whatever the count
         check_count(element);
         if (element.name == "vertex")
             read_vertices(element);
-        else if (element.name == "face")
+        else if (element.name == "face" && !particles_)
             read_faces(element);
         else
             skip_records(element);
@@ -443,7 +453,8 @@ private:
     }
 
     void read_vertices(const PlyElement& element) {
-        if (!mesh_.vertices.empty()) c_.fail("second vertex element");
+        if (have_vertex_element_) c_.fail("second vertex element");
+        have_vertex_element_ = true;
         const auto& props = element.properties;
         auto find = [&](const char* name) -> int {
             for (std::size_t i = 0; i < props.size(); ++i)
@@ -453,7 +464,7 @@ private:
         int ix = find("x"), iy = find("y"), iz = find("z");
         if (ix < 0 || iy < 0 || iz < 0) c_.fail("the vertex element has no x, y and z properties");
         int inx = find("nx"), iny = find("ny"), inz = find("nz");
-        bool normals = inx >= 0 && iny >= 0 && inz >= 0;
+        bool normals = inx >= 0 && iny >= 0 && inz >= 0 && !particles_;
 
         const std::size_t n = static_cast<std::size_t>(element.count);
         mesh_.vertices.resize(3 * n);
@@ -500,7 +511,13 @@ private:
             const std::string& name = props[free[f]].name;
             std::string base;
             int k = 1;
-            if (ends_with(name, "_x") && f + 2 < free.size()) {
+            // Particle files often spell normals and velocities nx ny nz and vx vy vz.
+            if (particles_ && f + 2 < free.size() && name.size() == 2 && (name[0] == 'n' || name[0] == 'v') && name[1] == 'x' &&
+                props[free[f + 1]].name == std::string(1, name[0]) + "y" && props[free[f + 2]].name == std::string(1, name[0]) + "z") {
+                base = name[0] == 'n' ? "normal" : "velocity";
+                k = 3;
+            }
+            if (k == 1 && ends_with(name, "_x") && f + 2 < free.size()) {
                 base = name.substr(0, name.size() - 2);
                 if (props[free[f + 1]].name == base + "_y" && props[free[f + 2]].name == base + "_z") k = 3;
             }
@@ -675,6 +692,18 @@ TriMesh read_obj(const Source& source) {
 
 }  // namespace
 
+namespace io_detail {
+
+ParticleData read_ply_particles(const Source& source) {
+    TriMesh mesh = PlyReader(source, true).read();
+    ParticleData out;
+    out.positions = std::move(mesh.vertices);
+    out.attributes = std::move(mesh.attributes);
+    return out;
+}
+
+}  // namespace io_detail
+
 void write_mesh(const TriMesh& mesh, const std::string& path) {
     std::string ext = lower_extension(path);
     if (ext != ".ply" && ext != ".obj" && ext != ".vtk")
@@ -689,8 +718,11 @@ void write_mesh(const TriMesh& mesh, const std::string& path) {
         write_vtk(mesh, path);
 }
 
-TriMesh read_mesh(const std::string& path) {
-    Bytes bytes = read_file(path);
+TriMesh read_mesh(const std::string& path) { return io_detail::read_mesh_from_bytes(path, read_file(path)); }
+
+namespace io_detail {
+
+TriMesh read_mesh_from_bytes(const std::string& path, Bytes bytes) {
     bool decompressed = false;
     if (has_gzip_magic(bytes)) {
         bytes = gunzip(path, bytes);
@@ -704,5 +736,7 @@ TriMesh read_mesh(const std::string& path) {
     fail(path, "unknown mesh format: not PLY (no 'ply' header) and the extension " +
                    (ext.empty() ? std::string("is missing") : "'" + ext + "' is not .obj") + " (supported: .ply, .obj)");
 }
+
+}  // namespace io_detail
 
 }  // namespace meniscus

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "errors.h"
+#include "mesh.h"
 #include "particles.h"
 
 namespace meniscus {
@@ -50,8 +51,32 @@ struct Source {
     bool decompressed = false;  // byte offsets in messages then refer to the decompressed data
 };
 
+// The particle readers, one per format (io_vtk.cpp, io_bgeo.cpp, io_vtu.cpp, io_mesh.cpp, io_numpy.cpp,
+// io_text.cpp, io_houdini.cpp). Each takes the whole (decompressed) file and throws FormatError on anything it cannot read.
 ParticleData read_vtk_particles(const Source& source);
 ParticleData read_bgeo_particles(const Source& source);
+ParticleData read_vtu_particles(const Source& source);    // VTK XML: .vtu (UnstructuredGrid), .vtp (PolyData)
+ParticleData read_ply_particles(const Source& source);    // the vertex element of a PLY file
+ParticleData read_npy_particles(const Source& source);    // NumPy .npy: (N,3) or a structured array
+ParticleData read_npz_particles(const Source& source);    // NumPy .npz: a zip of .npy members
+ParticleData read_csv_particles(const Source& source);    // delimited text with a header naming x, y, z
+ParticleData read_xyz_particles(const Source& source);    // raw little-endian float32 triples, or x y z text lines
+ParticleData read_houdini_json_particles(const Source& source);  // Houdini 12+ JSON geometry: ASCII .geo, binary .bgeo
+
+// Format detection and dispatch on bytes already in memory (gzip is undone first); `path` names the file in
+// messages and its extension decides where the content has no magic. read_particles(path) is read_file + this; the
+// fuzz harnesses call it directly.
+ParticleData read_particles_from_bytes(const std::string& path, Bytes bytes);
+TriMesh read_mesh_from_bytes(const std::string& path, Bytes bytes);  // read_mesh without the file
+
+// Inflates a zlib stream (window_bits 15) or raw deflate data (window_bits -15) that must decompress to exactly
+// `expected` bytes into `out` (which holds them). Corrupt, short or overlong streams are FormatErrors naming `what`.
+void inflate_exact(const std::string& path, const unsigned char* in, std::size_t in_size, unsigned char* out,
+                   std::size_t expected, int window_bits, const std::string& what);
+
+// The largest output a compressed block of `compressed` bytes may claim before it is refused as corrupt or a
+// decompression bomb (the same cap as for gzip files).
+inline std::uint64_t max_inflated_size(std::uint64_t compressed) { return kGunzipRatioCap * compressed + kGunzipSlackBytes; }
 
 // ---- number helpers ------------------------------------------------------------------------------------------
 
@@ -204,6 +229,27 @@ inline double decode_scalar(const unsigned char* p, ScalarType t, bool big_endia
         case ScalarType::f64: return bits_to_double(big_endian ? load_be64(p) : load_le64(p));
     }
     return 0.0;
+}
+
+// Converts n values of type t at p (n * scalar_size(t) bytes, any alignment) to float. The switch sits outside the
+// loops so that the common float32 cases stay tight.
+inline void decode_to_float(const unsigned char* p, std::size_t n, ScalarType t, bool big_endian, float* out) {
+    switch (t) {
+        case ScalarType::f32:
+            if (big_endian)
+                for (std::size_t i = 0; i < n; ++i) out[i] = bits_to_float(load_be32(p + 4 * i));
+            else
+                for (std::size_t i = 0; i < n; ++i) out[i] = bits_to_float(load_le32(p + 4 * i));
+            break;
+        case ScalarType::f64:
+            for (std::size_t i = 0; i < n; ++i)
+                out[i] = static_cast<float>(bits_to_double(big_endian ? load_be64(p + 8 * i) : load_le64(p + 8 * i)));
+            break;
+        default: {
+            const std::size_t size = scalar_size(t);
+            for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<float>(decode_scalar(p + size * i, t, big_endian));
+        }
+    }
 }
 
 // ---- cursor ------------------------------------------------------------------------------------------------

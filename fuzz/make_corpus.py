@@ -1,0 +1,148 @@
+#!/usr/bin/env python3
+"""Builds the committed seed corpus fuzz/corpus/<harness>/ from the shared frames and the test samples.
+
+Seeds are small on purpose (mutations on a few KiB reach far more code per second than on 200 KiB): the shared
+frames are cut down to their first particles with every section and attribute kept, in each format the harness
+reads. Rerunning gives identical files. Run:  python3 fuzz/make_corpus.py
+"""
+import gzip
+import pathlib
+import shutil
+import struct
+import sys
+
+import numpy as np
+
+HERE = pathlib.Path(__file__).resolve().parent
+ROOT = HERE.parent
+SHARED = ROOT.parent / "shared" / "data"
+sys.path.insert(0, str(ROOT / "tests" / "data" / "formats"))
+import make_samples as samples  # noqa: E402  (the converters of the test samples)
+
+CORPUS = HERE / "corpus"
+
+
+def legacy_vtk(positions, ids, velocity, binary=True):
+    """The SPlisHSPlasH layout: POINTS, one VERTEX cell each, SCALARS id, FIELD velocity."""
+    n = len(positions)
+    out = [b"# vtk DataFile Version 4.1\nSPlisHSPlasH particle data\n", b"BINARY\n" if binary else b"ASCII\n",
+           b"DATASET UNSTRUCTURED_GRID\n", f"POINTS {n} float\n".encode()]
+
+    def block(array, dtype):
+        if binary:
+            return np.asarray(array).astype(dtype).tobytes() + b"\n"
+        return (" ".join(samples.text(v) for v in np.asarray(array).ravel()) + "\n").encode()
+
+    out.append(block(positions, ">f4"))
+    out.append(f"CELLS {n} {2 * n}\n".encode())
+    out.append(block(np.stack([np.ones(n, int), np.arange(n)], 1), ">i4"))
+    out.append(f"CELL_TYPES {n}\n".encode())
+    out.append(block(np.ones(n, int), ">i4"))
+    out.append(f"POINT_DATA {n}\nSCALARS id unsigned_int 1\nLOOKUP_TABLE id_table\n".encode())
+    out.append(block(ids, ">u4"))
+    out.append(f"FIELD FieldData 1\nvelocity 3 {n} float\n".encode())
+    out.append(block(velocity, ">f4"))
+    return b"".join(out)
+
+
+def reduced_bgeo(path, count):
+    """The first `count` points of a shared BGEO frame, header and attribute definitions as they are."""
+    data = gzip.decompress(path.read_bytes())
+    n_points, = struct.unpack(">i", data[9:13])
+    n_attributes, = struct.unpack(">i", data[25:29])
+    pos = 41
+    words = 4
+    for _ in range(n_attributes):
+        name_length, = struct.unpack(">H", data[pos:pos + 2])
+        pos += 2 + name_length
+        size, kind = struct.unpack(">Hi", data[pos:pos + 6])
+        pos += 6 + 4 * size  # float/int/vector defaults (the shared files have no index attributes)
+        words += size
+    header = bytearray(data[:pos])
+    header[9:13] = struct.pack(">i", count)
+    return bytes(header) + data[pos:pos + 4 * words * count] + data[pos + 4 * words * n_points:]
+
+
+def write(harness, name, data):
+    folder = CORPUS / harness
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / name).write_bytes(data)
+
+
+def main():
+    if CORPUS.exists():
+        shutil.rmtree(CORPUS)
+    positions, ids, velocity = samples.read_legacy_vtk(samples.SOURCE)
+    n = 12
+    p, i, v = positions[:n], ids[:n], velocity[:n]
+    attributes = [("id", i, 1), ("velocity", v, 3)]
+    io_data = ROOT / "tests" / "data" / "io"
+    variants = ROOT / "tests" / "data" / "formats" / "variants"
+
+    # Legacy VTK: the shared layout, binary and ASCII, and the hand-written test files.
+    write("vtk", "splishsplash_binary.vtk", legacy_vtk(p, i, v))
+    write("vtk", "splishsplash_ascii.vtk", legacy_vtk(p, i, v, binary=False))
+    for f in sorted(io_data.glob("*.vtk")):
+        write("vtk", f.name, f.read_bytes())
+
+    # BGEO: reduced shared frames (plain: the harness sees no gzip).
+    write("bgeo", "dam_break.bgeo", reduced_bgeo(SHARED / "splashsurf" / "dam_break_frame_9_6859_particles.bgeo", n))
+    write("bgeo", "fluid_50.bgeo", reduced_bgeo(SHARED / "splashsurf" / "ParticleData_Fluid_50.bgeo", n))
+    write("bgeo", "hilbert.bgeo", reduced_bgeo(SHARED / "splashsurf" / "hilbert_46843_particles.bgeo", n))
+
+    # VTK XML: every encoding variant, plus a multi-piece file.
+    for f in sorted(variants.glob("*.vt[up]")):
+        write("vtu", f.name, f.read_bytes())
+
+    # PLY, NumPy, CSV, XYZ.
+    write("ply", "binary_le.ply", samples.ply(p, i, v, "binary_little_endian"))
+    write("ply", "binary_be.ply", samples.ply(p, i, v, "binary_big_endian"))
+    write("ply", "ascii.ply", samples.ply(p, i, v, "ascii"))
+    write("ply", "quad_ascii.ply", (io_data / "quad_ascii.ply").read_bytes())
+    write("npy", "positions.npy", samples.npy_bytes(p))
+    write("npy", "f8_fortran.npy", samples.npy_bytes(np.asfortranarray(p.astype("<f8"))))
+    write("npy", "f2.npy", samples.npy_bytes(p.astype("<f2")))
+    record = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("id", "<u4"), ("velocity", ">f4", (3,))])
+    table = np.empty(n, record)
+    table["x"], table["y"], table["z"] = p.T
+    table["id"], table["velocity"] = i, v
+    write("npy", "structured.npy", samples.npy_bytes(table))
+    members = {"positions": p, "id": i, "velocity": v}
+    write("npz", "stored.npz", samples.npz_bytes(members, False))
+    write("npz", "deflated.npz", samples.npz_bytes(members, True))
+    write("npz", "xyz_members.npz", (variants / "xyz_members.npz").read_bytes())
+    write("csv", "paraview.csv", samples.csv(p, i, v))
+    write("csv", "semicolon.csv", (variants / "semicolon.csv").read_bytes())
+    write("xyz", "raw.xyz", p.astype("<f4").tobytes())
+    write("xyz", "text.xyz", (variants / "text.xyz").read_bytes())
+
+    # Houdini JSON geometry: the variants (ASCII tuples/arrays, binary paged in both byte orders, a constant page)
+    # and a reduced shared frame in binary JSON.
+    for f in sorted(variants.glob("houdini_*")):
+        write("houdini", f.name, f.read_bytes())
+    write("houdini", "dam26_paged.bgeo", samples.BinaryJson().encode(samples.houdini_geometry(p, i, v, "paged", 4, [1, 2])))
+
+    # Whole-path harness: one seed of every format, some gzip-compressed.
+    for harness in ("vtk", "bgeo", "vtu", "ply", "npy", "npz", "csv", "houdini"):
+        for f in sorted((CORPUS / harness).iterdir())[:3]:
+            write("particles", f"{harness}_{f.name}", f.read_bytes())
+    write("particles", "vtk_binary.vtk.gz", gzip.compress(legacy_vtk(p, i, v), mtime=0))
+    write("particles", "bgeo.bgeo.gz", gzip.compress((CORPUS / "bgeo" / "dam_break.bgeo").read_bytes(), mtime=0))
+
+    # Meshes: the test meshes and a small binary PLY with normals and an attribute, like write_mesh makes.
+    write("mesh", "mixed.obj", (io_data / "mixed.obj").read_bytes())
+    write("mesh", "quad_ascii.ply", (io_data / "quad_ascii.ply").read_bytes())
+    header = (b"ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+              b"property float z\nproperty float nx\nproperty float ny\nproperty float nz\nproperty float velocity_x\n"
+              b"property float velocity_y\nproperty float velocity_z\nelement face 2\n"
+              b"property list uchar int vertex_indices\nend_header\n")
+    vertices = np.arange(36, dtype="<f4").tobytes()
+    faces = b"".join(b"\x03" + np.array(f, "<i4").tobytes() for f in ([0, 1, 2], [0, 2, 3]))
+    write("mesh", "binary_mesh.ply", header + vertices + faces)
+
+    total = sum(f.stat().st_size for f in CORPUS.rglob("*") if f.is_file())
+    print(f"corpus: {sum(1 for f in CORPUS.rglob('*') if f.is_file())} seeds, {total / 1e3:.0f} kB")
+
+
+if __name__ == "__main__":
+    main()
