@@ -18,4 +18,6 @@ echo "== Blender tests (bpy 4.5 LTS from PyPI)"
 [ -x build/venv-bpy/bin/python ] || /usr/bin/python3 -m venv --system-site-packages build/venv-bpy
 build/venv-bpy/bin/python -c "import bpy" 2>/dev/null || build/venv-bpy/bin/pip install -q 'bpy==4.5.*'
 bash tests/blender/run_bpy.sh build/addon
+echo "== C++ tests under AddressSanitizer + UBSan"
+bash scripts/test_sanitizers.sh
 echo "all tests passed"

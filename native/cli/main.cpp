@@ -67,9 +67,13 @@ std::vector<Frame> find_frames(const std::string& pattern) {
         const std::string digits = file.substr(prefix.size(), file.size() - prefix.size() - suffix.size());
         if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
         const long number = std::stol(digits);
-        // Duplicate frame numbers (fluid_7 and fluid_007): keep the first name in sorted order, deterministically.
+        // Duplicate frame numbers (fluid_7 and fluid_007): keep the first name in sorted order, deterministically,
+        // and say so.
         auto it = frames.find(number);
         const std::string full = (folder / file).string();
+        if (it != frames.end())
+            std::fprintf(stderr, "warning: frame %ld matches both %s and %s; using %s\n", number, it->second.path.c_str(), full.c_str(),
+                         std::min(full, it->second.path).c_str());
         if (it == frames.end() || full < it->second.path) frames[number] = {number, digits, full};
     }
     std::vector<Frame> result;
@@ -186,7 +190,14 @@ json run_frame(const ReconstructArgs& args, const std::string& input, const std:
     options.postprocess = args.post;
     options.execution = args.execution;
     options.keep_raw_mesh = !raw_output.empty();
-    PipelineResult result = run_pipeline(PositionsView(particles.positions.data(), particles.size()), inputs, options);
+    PipelineResult result;
+    try {
+        result = run_pipeline(PositionsView(particles.positions.data(), particles.size()), inputs, options);
+    } catch (const ResourceError& e) {
+        throw ResourceError(input + ": " + e.what());  // in a sequence, say which frame
+    } catch (const InputError& e) {
+        throw InputError(input + ": " + e.what());
+    }
     result.stats.stage_seconds.insert(result.stats.stage_seconds.begin(), {"read", read_seconds});
     for (const auto& w : result.stats.warnings) progress.message(input + ": warning: " + w);
 
@@ -349,7 +360,7 @@ int main(int argc, char** argv) {
 
     ReconstructArgs args;
     CLI::App* reconstruct = app.add_subcommand("reconstruct", "Reconstruct the surface of a particle file or sequence");
-    reconstruct->add_option("input", args.input, "Particle file (VTK, BGEO); '{}' in the name stands for the frame number")->required();
+    reconstruct->add_option("input", args.input, "Particle file (VTK, VTU, BGEO, PLY, XYZ, NPY/NPZ, CSV); '{}' in the name stands for the frame number")->required();
     reconstruct->add_option("-o,--output-file", args.output, "Output mesh (.ply, .obj, .vtk); '{}' for the frame number")->required();
     reconstruct->add_option("-r,--particle-radius", args.reconstruction.particle_radius, "Particle radius (absolute)")->required();
     reconstruct->add_option("-l,--smoothing-length", args.reconstruction.smoothing_length, "Smoothing length, multiple of r (support 2*l*r)")->capture_default_str();
