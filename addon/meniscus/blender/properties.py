@@ -208,9 +208,10 @@ class MeniscusSurfaceSettings(bpy.types.PropertyGroup):
     )
     weights_normalization: FloatProperty(
         name="Neighbour Count",
-        description="Neighbour count of a particle at a flat surface: particles with fewer neighbours are treated "
-                    "as splash and smoothed less (splashsurf uses 13)",
-        default=13.0, min=0.1, soft_min=1.0, soft_max=40.0, precision=2,
+        description="Distance-weighted neighbour count expected at a flat surface: places with fewer neighbours are "
+                    "treated as splash and smoothed less. About 5 suits SPH data at rest density with the default "
+                    "smoothing length (splashsurf's 13 counts neighbours differently and does not apply here)",
+        default=5.0, min=0.1, soft_min=1.0, soft_max=20.0, precision=2,
         options=set(),
         update=_rebuild_after_edit,
     )
