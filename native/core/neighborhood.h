@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cstddef>
+#include <climits>
 #include <cstdint>
 #include <vector>
 
@@ -48,6 +49,35 @@ public:
                 const uint64_t first = pack(x0, y, z), last = pack(x1, y, z);
                 auto it = std::lower_bound(cell_keys_.begin(), cell_keys_.end(), first);
                 for (; it != cell_keys_.end() && *it <= last; ++it) visit(static_cast<std::size_t>(it - cell_keys_.begin()));
+            }
+    }
+
+    // The particle ranges of the 27 cells around one cell. Queries from nearby points (mesh vertices come in
+    // spatially coherent order) reuse them instead of searching the cell keys again.
+    struct NeighborCells {
+        std::array<int64_t, 3> cell{INT64_MIN, INT64_MIN, INT64_MIN};
+        int count = 0;
+        std::array<std::pair<uint32_t, uint32_t>, 27> ranges{};
+    };
+
+    // Calls visit(j, squared_distance) for every sorted particle j within `radius` (< cell_size) of x, in the same
+    // order as for_each_neighbor without a cache.
+    template <class Visit>
+    void for_each_neighbor(const float* x, float radius, NeighborCells& cache, Visit&& visit) const {
+        const auto c = cell_of(x);
+        if (c != cache.cell) {
+            cache.cell = c;
+            cache.count = 0;
+            for_each_cell_in_box({c[0] - 1, c[1] - 1, c[2] - 1}, {c[0] + 1, c[1] + 1, c[2] + 1},
+                                 [&](std::size_t cell) { cache.ranges[cache.count++] = {cell_start_[cell], cell_start_[cell + 1]}; });
+        }
+        const float r2 = radius * radius;
+        for (int k = 0; k < cache.count; ++k)
+            for (std::size_t j = cache.ranges[k].first; j < cache.ranges[k].second; ++j) {
+                const float* p = &positions_[3 * j];
+                const float dx = x[0] - p[0], dy = x[1] - p[1], dz = x[2] - p[2];
+                const float d2 = dx * dx + dy * dy + dz * dz;
+                if (d2 < r2) visit(j, d2);
             }
     }
 

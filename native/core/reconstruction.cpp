@@ -525,23 +525,28 @@ namespace {
 template <class ValueAt>
 void interpolate(const SurfaceReconstruction& r, ValueAt&& value_at, int components, const std::vector<float>& points,
                  std::vector<float>& out, int threads) {
+    if (components < 1 || components > 16) throw InputError("interpolation takes 1 to 16 components, got " + std::to_string(components));
     const std::size_t n = points.size() / 3;
     out.assign(n * static_cast<std::size_t>(components), 0.0f);
     CubicSplineKernel kernel(r.params.compact_support());
-    parallel_for(static_cast<int64_t>(n), threads, [&](int64_t p) {
-        double weight_sum = 0.0;
-        double sums[16] = {};
-        std::vector<double> wide;
-        double* sum = components <= 16 ? sums : (wide.assign(static_cast<std::size_t>(components), 0.0), wide.data());
-        r.grid.for_each_neighbor(&points[3 * p], kernel.support(), [&](std::size_t j, float d2) {
-            const double w = double(r.volumes[j]) * kernel.value(std::sqrt(d2));
-            weight_sum += w;
-            const float* v = value_at(j);
-            for (int k = 0; k < components; ++k) sum[k] += w * v[k];
-        });
-        if (weight_sum > 0.0)
-            for (int k = 0; k < components; ++k) out[static_cast<std::size_t>(p) * components + k] = static_cast<float>(sum[k] / weight_sum);
-    }, 256);
+    constexpr int64_t kBlock = 256;
+    parallel_for((static_cast<int64_t>(n) + kBlock - 1) / kBlock, threads, [&](int64_t block) {
+        ParticleGrid::NeighborCells cache;
+        double sum[16];
+        const int64_t end = std::min<int64_t>(static_cast<int64_t>(n), (block + 1) * kBlock);
+        for (int64_t p = block * kBlock; p < end; ++p) {
+            double weight_sum = 0.0;
+            std::fill(sum, sum + components, 0.0);
+            r.grid.for_each_neighbor(&points[3 * p], kernel.support(), cache, [&](std::size_t j, float d2) {
+                const double w = double(r.volumes[j]) * kernel.value(std::sqrt(d2));
+                weight_sum += w;
+                const float* v = value_at(j);
+                for (int k = 0; k < components; ++k) sum[k] += w * v[k];
+            });
+            if (weight_sum > 0.0)
+                for (int k = 0; k < components; ++k) out[static_cast<std::size_t>(p) * components + k] = static_cast<float>(sum[k] / weight_sum);
+        }
+    });
 }
 
 }  // namespace
