@@ -19,48 +19,17 @@
 #include "errors.h"
 #include "io.h"
 #include "pipeline.h"
+#include "test_files.h"
 
 using namespace meniscus;
+using namespace meniscus::test;
 namespace fs = std::filesystem;
 
 namespace {
 
-using Bytes = std::vector<unsigned char>;
-
 const std::string kShared = MENISCUS_SHARED_DATA;
 const std::string kVariants = std::string(MENISCUS_TEST_DATA) + "/formats/variants";
 const std::string kFormats = std::string(MENISCUS_TEST_DATA) + "/formats";
-
-struct TempDir {
-    fs::path path;
-    explicit TempDir(const std::string& tag) {
-        static int counter = 0;
-        fs::path root = fs::is_directory("/dev/shm") && ::access("/dev/shm", W_OK) == 0 ? fs::path("/dev/shm") : fs::temp_directory_path();
-        path = root / ("meniscus_test_bad_" + std::to_string(::getpid()) + "_" + tag + "_" + std::to_string(counter++));
-        fs::remove_all(path);
-        fs::create_directories(path);
-        fs::permissions(path, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec | fs::perms::others_read |
-                                  fs::perms::others_exec);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(path, ec);
-    }
-    std::string file(const std::string& name) const { return (path / name).string(); }
-};
-
-Bytes read_bytes(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return Bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-void write_bytes(const std::string& path, const unsigned char* data, std::size_t size) {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
-}
-void write_bytes(const std::string& path, const Bytes& bytes) { write_bytes(path, bytes.data(), bytes.size()); }
-void write_text(const std::string& path, const std::string& text) {
-    write_bytes(path, reinterpret_cast<const unsigned char*>(text.data()), text.size());
-}
 
 // Reads the file: "" and the data on success, else the FormatError message (any other exception fails the test).
 std::string outcome(const std::string& path, ParticleData* out = nullptr) {

@@ -15,59 +15,20 @@
 
 #include "errors.h"
 #include "io.h"
+#include "test_files.h"
 
 using namespace meniscus;
+using namespace meniscus::test;
 namespace fs = std::filesystem;
 
 namespace {
-
-using Bytes = std::vector<unsigned char>;
 
 const std::string kShared = MENISCUS_SHARED_DATA;
 const std::string kFormats = std::string(MENISCUS_TEST_DATA) + "/formats";
 const std::string kSource = kShared + "/splashsurf/double_dam_break_frame_26_4732_particles.vtk";
 
-struct TempDir {
-    fs::path path;
-    explicit TempDir(const std::string& tag) {
-        static int counter = 0;
-        fs::path root = fs::is_directory("/dev/shm") && ::access("/dev/shm", W_OK) == 0 ? fs::path("/dev/shm") : fs::temp_directory_path();
-        path = root / ("meniscus_test_formats_" + std::to_string(::getpid()) + "_" + tag + "_" + std::to_string(counter++));
-        fs::remove_all(path);
-        fs::create_directories(path);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(path, ec);
-    }
-    std::string file(const std::string& name) const { return (path / name).string(); }
-};
-
-Bytes read_bytes(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return Bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-void write_bytes(const std::string& path, const Bytes& bytes) {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-}
-void write_text(const std::string& path, const std::string& text) { write_bytes(path, Bytes(text.begin(), text.end())); }
 std::string as_text(const Bytes& b) { return std::string(b.begin(), b.end()); }
 Bytes as_bytes(const std::string& s) { return Bytes(s.begin(), s.end()); }
-
-Bytes gzip(const Bytes& data) {
-    z_stream zs{};
-    REQUIRE(deflateInit2(&zs, Z_DEFAULT_COMPRESSION, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) == Z_OK);
-    Bytes out(deflateBound(&zs, static_cast<uLong>(data.size())) + 64);
-    zs.next_in = const_cast<Bytef*>(data.data());
-    zs.avail_in = static_cast<uInt>(data.size());
-    zs.next_out = out.data();
-    zs.avail_out = static_cast<uInt>(out.size());
-    REQUIRE(deflate(&zs, Z_FINISH) == Z_STREAM_END);
-    out.resize(zs.total_out);
-    deflateEnd(&zs);
-    return out;
-}
 
 std::string error_of(const std::string& path) {
     try {

@@ -1,0 +1,76 @@
+// Temporary directories and byte-level file helpers shared by the reader tests.
+#pragma once
+#include <unistd.h>
+#include <zlib.h>
+
+#include <catch2/catch.hpp>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+namespace meniscus {
+namespace test {
+
+namespace fs = std::filesystem;
+using Bytes = std::vector<unsigned char>;
+
+// The damage tests rewrite thousands of files; on some disks (ext4 with online discard) each truncation costs
+// milliseconds, so a RAM-backed /dev/shm is preferred unless TMPDIR asks for a specific place.
+inline fs::path temp_root() {
+    std::error_code ec;
+    if (!std::getenv("TMPDIR") && fs::is_directory("/dev/shm", ec) && ::access("/dev/shm", W_OK) == 0) return "/dev/shm";
+    return fs::temp_directory_path();
+}
+
+// A fresh directory under the temp root, readable by other users (the unreadable-file tests drop to 'nobody'),
+// removed at the end of the test.
+struct TempDir {
+    fs::path path;
+    explicit TempDir(const std::string& tag) {
+        static int counter = 0;
+        path = temp_root() / ("meniscus_test_" + std::to_string(::getpid()) + "_" + tag + "_" + std::to_string(counter++));
+        fs::remove_all(path);
+        fs::create_directories(path);
+        fs::permissions(path, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec | fs::perms::others_read |
+                                  fs::perms::others_exec);
+    }
+    ~TempDir() {
+        std::error_code ec;
+        fs::remove_all(path, ec);
+    }
+    std::string file(const std::string& name) const { return (path / name).string(); }
+};
+
+inline Bytes read_bytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return Bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+inline void write_bytes(const std::string& path, const unsigned char* data, std::size_t size) {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
+}
+inline void write_bytes(const std::string& path, const Bytes& bytes, std::size_t length) { write_bytes(path, bytes.data(), length); }
+inline void write_bytes(const std::string& path, const Bytes& bytes) { write_bytes(path, bytes.data(), bytes.size()); }
+inline void write_text(const std::string& path, const std::string& text) {
+    write_bytes(path, reinterpret_cast<const unsigned char*>(text.data()), text.size());
+}
+
+inline Bytes gzip(const Bytes& data) {
+    z_stream zs{};
+    REQUIRE(deflateInit2(&zs, Z_DEFAULT_COMPRESSION, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) == Z_OK);
+    Bytes out(deflateBound(&zs, static_cast<uLong>(data.size())) + 64);
+    zs.next_in = const_cast<Bytef*>(data.data());
+    zs.avail_in = static_cast<uInt>(data.size());
+    zs.next_out = out.data();
+    zs.avail_out = static_cast<uInt>(out.size());
+    REQUIRE(deflate(&zs, Z_FINISH) == Z_STREAM_END);
+    out.resize(zs.total_out);
+    deflateEnd(&zs);
+    return out;
+}
+
+}  // namespace test
+}  // namespace meniscus
