@@ -153,3 +153,24 @@ def test_weights_are_zero_for_an_isolated_particle_and_one_inside_a_block():
     top_centre = np.array([9.5 * spacing, 9.5 * spacing, 19 * spacing])
     on_top = np.linalg.norm(mesh.vertices - top_centre, axis=1) < 0.15
     assert weights[on_top].min() > 0.99
+
+
+def test_sph_normals_are_unit_and_outward(shared):
+    positions = meniscus.read_particles(shared / "splashsurf/bunny_frame_14_7705_particles.vtk").positions
+    geometric = meniscus.reconstruct(positions, 0.025, cube_size=1.0)
+    sph = meniscus.reconstruct(positions, 0.025, cube_size=1.0, sph_normals=True)
+    np.testing.assert_allclose(np.linalg.norm(sph.normals, axis=1), 1.0, atol=1e-4)
+    agreement = np.einsum("ij,ij->i", sph.normals, geometric.normals)
+    assert np.median(agreement) > 0.95   # the colour-field gradient points out of the fluid, like the faces
+    assert (agreement > 0).mean() > 0.99
+
+
+def test_mesh_cleanup_in_the_pipeline_keeps_the_mesh_valid_and_smaller(shared):
+    positions = meniscus.read_particles(shared / "splashsurf/double_dam_break_frame_26_4732_particles.vtk").positions
+    plain = meniscus.reconstruct(positions, 0.025, cube_size=0.5)
+    cleaned = reconstruct(positions, decimate_barnacles=False, mesh_cleanup=True)
+    q, raw = meniscus.assess_quality(cleaned), meniscus.assess_quality(cleaned.raw)
+    assert q["check"]["ok"], q["check"]["summary"]
+    assert len(cleaned.vertices) < 0.9 * len(plain.vertices)
+    assert abs(q["volume"] / raw["volume"] - 1.0) < 0.03
+    assert q["bumpiness"] <= 0.35 * raw["bumpiness"]
