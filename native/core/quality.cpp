@@ -7,6 +7,7 @@
 
 #include "mesh_adjacency.h"
 #include "postprocess.h"
+#include "volume.h"
 
 namespace meniscus {
 
@@ -53,11 +54,6 @@ inline double tet_volume(const TriMesh& m, const int32_t* t, Vec r) {
     return std::isfinite(v) ? v : 0.0;
 }
 
-int32_t find_root(std::vector<int32_t>& parent, int32_t v) {
-    while (parent[v] != v) v = parent[v] = parent[parent[v]];
-    return v;
-}
-
 }  // namespace
 
 MeshQuality assess_quality(const TriMesh& mesh, int threads) {
@@ -89,26 +85,21 @@ MeshQuality assess_quality(const TriMesh& mesh, int threads) {
         return std::isfinite(area) ? area : 0.0;
     });
 
-    // Connected components by shared vertices. Union by smaller index makes every root its component's smallest
-    // vertex, independent of the triangle order.
+    // Connected components by shared vertices (volume.h: labels follow each component's smallest vertex, so they do
+    // not depend on the triangle order). Components without triangles (unreferenced vertices) are left out.
     {
-        std::vector<int32_t> parent(static_cast<std::size_t>(nv));
-        std::iota(parent.begin(), parent.end(), 0);
-        for (int64_t t = 0; t < nt; ++t)
-            for (int k = 1; k < 3; ++k) {
-                const int32_t a = find_root(parent, tris[3 * t]), b = find_root(parent, tris[3 * t + k]);
-                if (a != b) parent[std::max(a, b)] = std::min(a, b);
-            }
-        std::vector<int32_t> slot(static_cast<std::size_t>(nv), -1);
-        std::vector<int32_t> first_vertex;
+        int32_t count = 0;
+        const std::vector<int32_t> labels = component_labels(mesh, &count);
+        std::vector<int32_t> slot(static_cast<std::size_t>(count), -1);
+        std::vector<int32_t> first_label;
         for (int64_t t = 0; t < nt; ++t) {
-            const int32_t root = find_root(parent, tris[3 * t]);
-            if (slot[root] < 0) {
-                slot[root] = static_cast<int32_t>(q.components.size());
+            const int32_t label = labels[tris[3 * t]];
+            if (slot[label] < 0) {
+                slot[label] = static_cast<int32_t>(q.components.size());
                 q.components.emplace_back();
-                first_vertex.push_back(root);
+                first_label.push_back(label);
             }
-            ComponentQuality& c = q.components[slot[root]];
+            ComponentQuality& c = q.components[slot[label]];
             ++c.triangles;
             c.volume += tet_volume(mesh, tris + 3 * t, ref);
         }
@@ -118,7 +109,7 @@ MeshQuality assess_quality(const TriMesh& mesh, int threads) {
             const ComponentQuality &ca = q.components[a], &cb = q.components[b];
             if (ca.volume != cb.volume) return ca.volume > cb.volume;
             if (ca.triangles != cb.triangles) return ca.triangles > cb.triangles;
-            return first_vertex[a] < first_vertex[b];
+            return first_label[a] < first_label[b];
         });
         std::vector<ComponentQuality> sorted;
         sorted.reserve(order.size());
