@@ -110,6 +110,20 @@ const JValue* lookup(const JValue& v, std::string_view key) {
 bool wanted_at_root(std::string_view key) { return key == "pointcount" || key == "attributes" || key == "fileversion"; }
 bool wanted_in_attributes(std::string_view key) { return key == "pointattributes"; }
 
+// How deep in the document a value sits, and whether it is kept: only the point count and the point attributes are.
+enum class JsonLevel { root, attributes, kept, skip };
+
+// The level of a child value. keyed: the child is a value with a key (a map entry, or an array item following its
+// key string, as Houdini writes maps); it is kept when the key is wanted at this level, and "attributes" is read
+// at the attributes level. Shared by the ASCII and the binary parser.
+JsonLevel child_level(JsonLevel level, bool keep, bool keyed, const std::string& key) {
+    if (!keep) return JsonLevel::skip;
+    if (level == JsonLevel::kept || !keyed) return level;
+    if (level == JsonLevel::root)
+        return !wanted_at_root(key) ? JsonLevel::skip : key == "attributes" ? JsonLevel::attributes : JsonLevel::kept;
+    return wanted_in_attributes(key) ? JsonLevel::kept : JsonLevel::skip;
+}
+
 // Memory: values are built only for the point attributes, numbers are packed (8 bytes each), and what is built is
 // charged against a budget relative to the file, so that a file of nested empty arrays or one-number tuples cannot
 // turn into gigabytes of nodes.
@@ -219,7 +233,7 @@ public:
 private:
     Cursor c_;
     Budget budget_;
-    enum class Level { root, attributes, kept, skip };
+    using Level = JsonLevel;
 
     [[noreturn]] void fail(const std::string& what) { c_.fail("bad JSON at " + c_.where() + ": " + what); }
 
@@ -316,17 +330,7 @@ private:
                     after_key = false;
                     continue;
                 }
-                const std::string& k = is_map ? key : pending_key;
-                Level child = level;
-                if (!keep) {
-                    child = Level::skip;
-                } else if (level != Level::kept && (is_map || after_key)) {
-                    // A value: kept when its key is wanted at this level; "attributes" is read at the attributes level.
-                    if (level == Level::root)
-                        child = !wanted_at_root(k) ? Level::skip : k == "attributes" ? Level::attributes : Level::kept;
-                    else
-                        child = wanted_in_attributes(k) ? Level::kept : Level::skip;
-                }
+                const Level child = child_level(level, keep, is_map || after_key, is_map ? key : pending_key);
                 JValue item;
                 value(item, depth + 1, child);
                 after_key = !is_map && !after_key && item.kind == JValue::Kind::string;
@@ -400,7 +404,7 @@ private:
     Budget budget_;
     bool big_ = false;
     std::map<std::uint64_t, std::string> tokens_;
-    enum class Level { root, attributes, kept, skip };
+    using Level = JsonLevel;
 
     std::uint64_t u(std::size_t n, const char* what) {
         const unsigned char* p = c_.take(n, what);
@@ -560,16 +564,7 @@ private:
                         else c_.fail("a binary JSON map key at " + c_.where(c_.pos() - 1) + " is not a string");
                         t = next_token();
                     }
-                    const std::string& k = is_map ? key : pending_key;
-                    Level child = level;
-                    if (!keep) {
-                        child = Level::skip;
-                    } else if (level != Level::kept && (is_map || after_key)) {
-                        if (level == Level::root)
-                            child = !wanted_at_root(k) ? Level::skip : k == "attributes" ? Level::attributes : Level::kept;
-                        else
-                            child = wanted_in_attributes(k) ? Level::kept : Level::skip;
-                    }
+                    const Level child = child_level(level, keep, is_map || after_key, is_map ? key : pending_key);
                     JValue item;
                     value(item, t, depth + 1, child);
                     after_key = !is_map && !after_key && item.kind == JValue::Kind::string;
