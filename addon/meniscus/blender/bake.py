@@ -16,7 +16,7 @@ from bpy.props import BoolProperty, IntProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
 from .. import cache, sequence
-from . import handlers, material
+from . import handlers, material, operators
 
 # Running UI bakes by object name (names, not references: undo and file loads invalidate object references).
 _jobs = {}
@@ -229,23 +229,11 @@ class MENISCUS_OT_add_cache(bpy.types.Operator, ImportHelper):
                                 default=True)
 
     def execute(self, context):
-        absolute = os.path.abspath(bpy.path.abspath(self.filepath))
-        try:
-            pattern = sequence.parse_pattern(absolute)
-        except ValueError as error:
-            self.report({"ERROR"}, str(error))
+        found = operators.find_sequence(self, self.filepath, "mesh files")
+        if found is None:
             return {"CANCELLED"}
-        frames = pattern.list_frames()
-        if not frames:
-            self.report({"ERROR"}, f"No mesh files match {pattern.pattern_string()}")
-            return {"CANCELLED"}
-        first, last = sequence.frame_range(frames)
-        stored = pattern.pattern_string()
-        if self.relative_path and bpy.data.is_saved:
-            try:
-                stored = bpy.path.relpath(stored)
-            except ValueError:
-                pass
+        pattern, frames, first, last = found
+        stored = operators.stored_path(pattern.pattern_string(), self.relative_path)
         name = pattern.prefix.rstrip("_-. ") or "Fluid Cache"
         mesh = bpy.data.meshes.new(name)
         obj = bpy.data.objects.new(name, mesh)

@@ -18,7 +18,7 @@ def _object_name(pattern):
     return name or "Fluid Surface"
 
 
-def _stored_path(pattern_string, make_relative):
+def stored_path(pattern_string, make_relative):
     """The path to keep in the object's property: relative to the .blend where possible and wanted."""
     # An unsaved file has no folder to be relative to, so the path stays absolute until the user saves and re-adds.
     if make_relative and bpy.data.is_saved:
@@ -27,6 +27,25 @@ def _stored_path(pattern_string, make_relative):
         except ValueError:  # another drive on Windows: no relative path exists
             pass
     return pattern_string
+
+
+def find_sequence(operator, filepath, what):
+    """The frame pattern of a chosen file, its frames and their range, or None after reporting why there are none.
+
+    what names the files in the message ("particle files", "mesh files").
+    """
+    absolute = os.path.abspath(bpy.path.abspath(filepath))
+    try:
+        pattern = sequence.parse_pattern(absolute)
+    except ValueError as error:
+        operator.report({"ERROR"}, str(error))
+        return None
+    frames = pattern.list_frames()
+    if not frames:
+        operator.report({"ERROR"}, f"No {what} match {pattern.pattern_string()}")
+        return None
+    first, last = sequence.frame_range(frames)
+    return pattern, frames, first, last
 
 
 class MENISCUS_OT_add_sequence(bpy.types.Operator, ImportHelper):
@@ -59,17 +78,10 @@ class MENISCUS_OT_add_sequence(bpy.types.Operator, ImportHelper):
         if not text:
             self.report({"ERROR"}, "No file given")
             return {"CANCELLED"}
-        absolute = os.path.abspath(bpy.path.abspath(text))
-        try:
-            pattern = sequence.parse_pattern(absolute)
-        except ValueError as error:
-            self.report({"ERROR"}, str(error))
+        found = find_sequence(self, text, "particle files")
+        if found is None:
             return {"CANCELLED"}
-        frames = pattern.list_frames()
-        if not frames:
-            self.report({"ERROR"}, f"No particle files match {pattern.pattern_string()}")
-            return {"CANCELLED"}
-        first, last = sequence.frame_range(frames)
+        pattern, frames, first, last = found
 
         scene = context.scene
         mesh = bpy.data.meshes.new(_object_name(pattern))
@@ -80,7 +92,7 @@ class MENISCUS_OT_add_sequence(bpy.types.Operator, ImportHelper):
 
         settings = obj.meniscus
         # is_surface is set last: until then the parameter update callbacks do not trigger a rebuild per field.
-        settings.file_pattern = _stored_path(pattern.pattern_string(), self.relative_path)
+        settings.file_pattern = stored_path(pattern.pattern_string(), self.relative_path)
         settings.particle_radius = self.particle_radius
         settings.frame_start = first
         settings.frame_end = last
