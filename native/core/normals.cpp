@@ -31,7 +31,8 @@ void face_cross(const float* v, const int32_t* t, double n[3]) {
 bool normalise_into(const double n[3], float* out) {
     const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     if (!(length > 0.0) || !std::isfinite(length)) return false;
-    const float r[3] = {static_cast<float>(n[0] / length), static_cast<float>(n[1] / length), static_cast<float>(n[2] / length)};
+    const double inverse = 1.0 / length;  // one division instead of three: this runs per vertex and iteration
+    const float r[3] = {static_cast<float>(n[0] * inverse), static_cast<float>(n[1] * inverse), static_cast<float>(n[2] * inverse)};
     if (!std::isfinite(r[0]) || !std::isfinite(r[1]) || !std::isfinite(r[2])) return false;
     out[0] = r[0], out[1] = r[1], out[2] = r[2];
     return true;

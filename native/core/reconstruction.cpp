@@ -339,11 +339,19 @@ TriMesh mesh_bricks(const std::vector<Coords>& bricks, const Sampler& sample, do
 // neighbour counts of Eq. 10-11 with h = H, in one pass over the cell neighbourhoods.
 void compute_particle_quantities(SurfaceReconstruction& r, const CubicSplineKernel& kernel, int threads) {
     const ParticleGrid& grid = r.grid;
-    r.volumes.assign(grid.size(), 0.0f);
-    r.neighbor_counts.assign(grid.size(), 0.0f);
+    const std::size_t n = grid.size();
+    r.volumes.assign(n, 0.0f);
+    r.neighbor_counts.assign(n, 0.0f);
     const float support_squared = kernel.support_squared();
     const float inverse_support = 1.0f / kernel.support();
-    const float self = kernel.value(0.0f);
+    const float normalisation = kernel.value(0.0f);  // W(0) = 8 / (pi H^3): shapes are summed, scaled once
+    // Coordinates split into x, y, z arrays padded by one block, so that neighbours are visited kLanes at a time
+    // in a branch-free loop the compiler vectorises: only about 15 % of the particles of the 27 cells lie within
+    // the support, and a branch per candidate mispredicts too often. Lane l sums the candidates j = l (mod
+    // kLanes) of each range, and the lanes are added in order at the end: the same sum for any thread count.
+    constexpr int kLanes = 8;
+    std::vector<float> xs(n + kLanes, 0.0f), ys(n + kLanes, 0.0f), zs(n + kLanes, 0.0f);
+    for (std::size_t j = 0; j < n; ++j) xs[j] = grid.position(j)[0], ys[j] = grid.position(j)[1], zs[j] = grid.position(j)[2];
     parallel_for(static_cast<int64_t>(grid.num_cells()), threads, [&](int64_t cell) {
         const auto c = grid.cell_coords(static_cast<std::size_t>(cell));
         std::array<std::pair<std::size_t, std::size_t>, 27> ranges;
@@ -352,20 +360,34 @@ void compute_particle_quantities(SurfaceReconstruction& r, const CubicSplineKern
             ranges[range_count++] = {grid.cell_begin(other), grid.cell_end(other)};
         });
         for (std::size_t i = grid.cell_begin(cell); i < grid.cell_end(cell); ++i) {
-            const float* xi = grid.position(i);
-            float density = self, count = 0.0f;
-            for (int k = 0; k < range_count; ++k)
-                for (std::size_t j = ranges[k].first; j < ranges[k].second; ++j) {
-                    if (j == i) continue;
-                    const float* xj = grid.position(j);
-                    const float dx = xi[0] - xj[0], dy = xi[1] - xj[1], dz = xi[2] - xj[2];
-                    const float d2 = dx * dx + dy * dy + dz * dz;
-                    if (d2 >= support_squared) continue;
-                    const float d = std::sqrt(d2);
-                    density += kernel.value(d);
-                    count += 1.0f - d * inverse_support;
+            const float xi = xs[i], yi = ys[i], zi = zs[i];
+            float shape_sum[kLanes] = {}, hat_sum[kLanes] = {};
+            for (int k = 0; k < range_count; ++k) {
+                const std::size_t end = ranges[k].second;
+                for (std::size_t block = ranges[k].first; block < end; block += kLanes) {
+                    const int valid_lanes = static_cast<int>(std::min<std::size_t>(kLanes, end - block));
+                    const int self_lane = i >= block && i < block + kLanes ? static_cast<int>(i - block) : -1;
+                    const float* bx = xs.data() + block;
+                    const float* by = ys.data() + block;
+                    const float* bz = zs.data() + block;
+                    for (int l = 0; l < kLanes; ++l) {
+                        const float dx = xi - bx[l], dy = yi - by[l], dz = zi - bz[l];
+                        const float d2 = dx * dx + dy * dy + dz * dz;
+                        // 1 or 0 as a factor rather than a branch (positions are finite, so 0 * value is 0).
+                        const float counts = static_cast<float>((l < valid_lanes) & (l != self_lane) & (d2 < support_squared));
+                        // Cubic spline as 2a^3 - b^3 with a = max(1 - q, 0), b = max(1 - 2q, 0): valid on [0, 1].
+                        const float q = std::sqrt(d2) * inverse_support;
+                        float a = 1.0f - q, b = 1.0f - 2.0f * q;
+                        a = a > 0.0f ? a : 0.0f;
+                        b = b > 0.0f ? b : 0.0f;
+                        shape_sum[l] += counts * (2.0f * a * a * a - b * b * b);
+                        hat_sum[l] += counts * (1.0f - q);  // Eq. 10-11: linear hat with h = H
+                    }
                 }
-            r.volumes[i] = 1.0f / density;
+            }
+            float shape = 0.0f, count = 0.0f;
+            for (int l = 0; l < kLanes; ++l) shape += shape_sum[l], count += hat_sum[l];
+            r.volumes[i] = 1.0f / (normalisation * (1.0f + shape));  // rho_i / m_i = W(0) + sum_j W_ij
             r.neighbor_counts[i] = count;
         }
     }, 16);

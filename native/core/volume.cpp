@@ -63,15 +63,15 @@ std::vector<double> component_volumes(const TriMesh& mesh, const std::vector<int
 }
 
 void restore_component_volumes(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<int32_t>& labels,
-                               const std::vector<double>& target, const std::vector<float>& amount, double max_offset, int threads) {
+                               const std::vector<double>& target, const std::vector<float>& amount, double max_offset,
+                               int normal_iterations, int threads) {
     const int32_t count = static_cast<int32_t>(target.size());
     if (count == 0 || mesh.num_triangles() == 0) return;
-    const std::vector<float> saved_normals = mesh.normals;
     std::vector<double> applied(static_cast<std::size_t>(count), 0.0);
     // Smoothed normals: offsets along raw vertex normals would print the triangulation's noise back in. The offsets
     // are small against the features, so the directions computed once serve both Newton steps.
     compute_area_weighted_normals(mesh, adjacency, threads);
-    smooth_normals(mesh, adjacency, 10, threads);
+    smooth_normals(mesh, adjacency, normal_iterations, threads);
     // Volume is close to linear in the offset for offsets small against the feature size: two Newton steps
     // bring it within a small fraction of a percent.
     for (int step = 0; step < 2; ++step) {
@@ -106,7 +106,6 @@ void restore_component_volumes(TriMesh& mesh, const MeshAdjacency& adjacency, co
             for (int k = 0; k < 3; ++k) mesh.vertices[3 * v + k] = static_cast<float>(mesh.vertices[3 * v + k] + s * mesh.normals[3 * v + k]);
         }
     }
-    mesh.normals = saved_normals;
 }
 
 std::size_t revert_collapsed_components(TriMesh& mesh, const std::vector<float>& before, const std::vector<int32_t>& labels,

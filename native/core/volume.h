@@ -18,11 +18,14 @@ std::vector<int32_t> component_labels(const TriMesh& mesh, int32_t* count);
 // Signed enclosed volume per component (divergence theorem, in double, in triangle order).
 std::vector<double> component_volumes(const TriMesh& mesh, const std::vector<int32_t>& labels, int32_t count);
 
-// Moves vertices along their area-weighted normals by s_c * amount_i so that component c's volume returns to
-// target[c]; amount empty means 1 everywhere. |s_c| is capped at max_offset. A few Newton steps.
+// Moves vertices along their smoothed area-weighted normals (normal_iterations of Eq. 12) by s_c * amount_i so
+// that component c's volume returns to target[c]; amount empty means 1 everywhere. |s_c| is capped at
+// max_offset. A few Newton steps. Leaves those normals in mesh.normals: the offsets are tiny against the edge
+// lengths, so they are the surface's normals too and the pipeline does not compute them a second time.
 struct MeshAdjacency;
 void restore_component_volumes(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<int32_t>& labels,
-                               const std::vector<double>& target, const std::vector<float>& amount, double max_offset, int threads);
+                               const std::vector<double>& target, const std::vector<float>& amount, double max_offset,
+                               int normal_iterations, int threads);
 
 // Smoothing may collapse a component smaller than a few cubes (a blob around one grid point) into a point or a
 // line. Such a component gets its positions from `before` back: smoothing never leaves a degenerate triangle or

@@ -36,7 +36,7 @@ TEST_CASE("restoration gives each smoothed component its volume back, weighted v
     laplacian_smooth(mesh, weights, 25, 1.0, 2);
     const double shrunk = component_volumes(mesh, labels, count)[0];
     CHECK(shrunk < 0.97 * target[0]);
-    restore_component_volumes(mesh, build_adjacency(mesh, 2), labels, target, weights, 0.5, 2);
+    restore_component_volumes(mesh, build_adjacency(mesh, 2), labels, target, weights, 0.5, 10, 2);
     const auto after = component_volumes(mesh, labels, count);
     CHECK(after[0] == Approx(target[0]).epsilon(1e-3));
     CHECK(after[1] == Approx(target[1]).epsilon(1e-9));
