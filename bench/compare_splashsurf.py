@@ -18,15 +18,7 @@ sys.path.insert(0, str(ROOT / "build" / "addon"))
 import meniscus  # noqa: E402
 import pysplashsurf  # noqa: E402
 
-FRAMES = [
-    "bunny_frame_14_7705_particles.vtk",
-    "dam_break_frame_9_6859_particles.bgeo",
-    "double_dam_break_frame_01_4732_particles.vtk",
-    "double_dam_break_frame_26_4732_particles.vtk",
-    "hilbert_46843_particles.bgeo",
-    "hilbert2_7954_particles.vtk",
-    "pentagonal_hexecontahedron_32286_particles.bgeo",
-]
+from compare import FRAMES  # noqa: E402  (the same seven shared frames)
 PARAMS = dict(particle_radius=0.025, smoothing_length=2.0, cube_size=0.5, iso_threshold=0.6)
 
 

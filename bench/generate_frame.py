@@ -40,12 +40,13 @@ def generate(count: int, radius: float = 0.025, seed: int = 1) -> np.ndarray:
     return particles[:count]
 
 
-def write_vtk(path: pathlib.Path, positions: np.ndarray) -> None:
+def write_vtk(path: pathlib.Path, positions: np.ndarray, velocity: np.ndarray = None) -> None:
+    """Legacy VTK, binary (big-endian): vertex cells, and a `velocity` point attribute when given."""
     n = len(positions)
     with open(path, "wb") as f:
         f.write(b"# vtk DataFile Version 4.1\nMeniscus generated benchmark frame\nBINARY\nDATASET UNSTRUCTURED_GRID\n")
         f.write(f"POINTS {n} float\n".encode())
-        f.write(positions.astype(">f4").tobytes())
+        f.write(np.ascontiguousarray(positions, dtype=">f4").tobytes())
         f.write(f"\nCELLS {n} {2 * n}\n".encode())
         cells = np.empty((n, 2), dtype=">i4")
         cells[:, 0] = 1
@@ -53,6 +54,9 @@ def write_vtk(path: pathlib.Path, positions: np.ndarray) -> None:
         f.write(cells.tobytes())
         f.write(f"\nCELL_TYPES {n}\n".encode())
         f.write(np.full(n, 1, dtype=">i4").tobytes())
+        if velocity is not None:
+            f.write(f"\nPOINT_DATA {n}\nVECTORS velocity float\n".encode())
+            f.write(np.ascontiguousarray(velocity, dtype=">f4").tobytes())
         f.write(b"\n")
 
 

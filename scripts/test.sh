@@ -20,4 +20,6 @@ build/venv-bpy/bin/python -c "import bpy" 2>/dev/null || build/venv-bpy/bin/pip 
 bash tests/blender/run_bpy.sh build/addon
 echo "== C++ tests under AddressSanitizer + UBSan"
 bash scripts/test_sanitizers.sh
+echo "== Benchmark against pysplashsurf, small version (both tools run, meshes valid; timings not judged in CI)"
+bash bench/compare.sh --quick
 echo "all tests passed"

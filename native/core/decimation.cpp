@@ -241,8 +241,9 @@ void drop_deleted_triangles(std::vector<int32_t>& triangles, const std::vector<u
 // Writes the working arrays back into mesh without the removed vertices. With group lists (cleanup), every
 // surviving vertex's normal and attributes become the mean over the original vertices merged into it, like its
 // position; without them (barnacles: the centre stays where it is) the survivor keeps its own values.
-void compact_into(TriMesh& mesh, std::vector<int32_t>& triangles, const std::vector<float>& positions,
-                  const std::vector<uint8_t>& removed, const std::vector<int32_t>* group_next, int threads) {
+// Returns the new index of every old vertex (-1: removed).
+std::vector<int32_t> compact_into(TriMesh& mesh, std::vector<int32_t>& triangles, const std::vector<float>& positions,
+                                  const std::vector<uint8_t>& removed, const std::vector<int32_t>* group_next, int threads) {
     const int64_t nv = static_cast<int64_t>(removed.size());
     std::vector<int32_t> new_index(static_cast<std::size_t>(nv), -1);
     std::vector<int32_t> survivors;
@@ -297,6 +298,36 @@ void compact_into(TriMesh& mesh, std::vector<int32_t>& triangles, const std::vec
     for (Attribute& a : mesh.attributes) gather(a.values, a.components, false);
     mesh.vertices.swap(vertices);
     mesh.triangles.swap(triangles);
+    return new_index;
+}
+
+// The adjacency of the compacted mesh from the one of the working mesh it came from (same triangles, in the same
+// order): rows of removed vertices (which have no triangles left) dropped and neighbour indices renumbered. The
+// renumbering keeps the order, so rows stay sorted; a linear pass instead of a rebuild.
+MeshAdjacency renumber_adjacency(const MeshAdjacency& working, const std::vector<int32_t>& new_index, int threads) {
+    const int64_t nv = static_cast<int64_t>(new_index.size());
+    int64_t survivors = 0;
+    for (int64_t v = 0; v < nv; ++v) survivors += new_index[v] >= 0;
+    auto renumber_rows = [&](const CsrList& in, bool renumber_items) {
+        CsrList out;
+        out.offsets.assign(static_cast<std::size_t>(survivors) + 1, 0);
+        for (int64_t v = 0; v < nv; ++v)
+            if (new_index[v] >= 0) out.offsets[new_index[v] + 1] = in.size(v);
+        for (int64_t r = 0; r < survivors; ++r) out.offsets[r + 1] += out.offsets[r];
+        out.items.resize(static_cast<std::size_t>(out.offsets.back()));
+        parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+            for (int64_t v = begin; v < end; ++v) {
+                if (new_index[v] < 0) continue;
+                int32_t* dst = out.items.data() + out.offsets[new_index[v]];
+                for (int64_t k = in.begin(v); k < in.end(v); ++k) *dst++ = renumber_items ? new_index[in.items[k]] : in.items[k];
+            }
+        });
+        return out;
+    };
+    MeshAdjacency result;
+    result.vertex_triangles = renumber_rows(working.vertex_triangles, false);
+    result.vertex_neighbours = renumber_rows(working.vertex_neighbours, true);
+    return result;
 }
 
 // ---- barnacle detection ------------------------------------------------------------------------------------
@@ -428,8 +459,9 @@ std::size_t count_double_vertex_configurations(const TriMesh& mesh) {
     return count_double_vertex_configurations(build_adjacency(mesh, 0), 0);
 }
 
-std::size_t decimate_barnacles(TriMesh& mesh, int threads) {
+std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_adjacency) {
     validate_mesh_arrays(mesh, "decimate_barnacles");
+    if (final_adjacency) *final_adjacency = MeshAdjacency{};
     threads = resolve_threads(threads);
     std::vector<int32_t> triangles = mesh.triangles;
     std::vector<float> positions = mesh.vertices;
@@ -442,11 +474,14 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads) {
     // Candidates too close to an earlier one are deferred to the next pass, where the mesh (and so the detection)
     // reflects the collapses already made; a few passes reach the fixed point.
     constexpr int kMaxPasses = 10;
+    MeshAdjacency adj;
+    bool adjacency_is_current = false;  // adj describes the working triangles as they are now
     for (int pass = 0; pass < kMaxPasses; ++pass) {
         TriMesh view;  // adjacency of the working triangles (removed vertices simply have no triangles)
         view.vertices.swap(positions);
         view.triangles.swap(triangles);
-        const MeshAdjacency adj = build_adjacency(view, threads);
+        adj = build_adjacency(view, threads);
+        adjacency_is_current = true;
         positions.swap(view.vertices);
         triangles.swap(view.triangles);
 
@@ -511,8 +546,14 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads) {
         drop_deleted_triangles(triangles, work.deleted_triangles());
         changed = changed || pass_changed;
         if (!pass_changed) break;
+        adjacency_is_current = false;
     }
-    if (changed) compact_into(mesh, triangles, positions, removed, nullptr, threads);
+    if (changed) {
+        const std::vector<int32_t> new_index = compact_into(mesh, triangles, positions, removed, nullptr, threads);
+        if (final_adjacency && adjacency_is_current) *final_adjacency = renumber_adjacency(adj, new_index, threads);
+    } else if (final_adjacency && adjacency_is_current) {
+        *final_adjacency = std::move(adj);
+    }
     return removed_configurations;
 }
 

@@ -25,6 +25,30 @@ std::array<int64_t, 3> ParticleGrid::cell_coords(std::size_t cell) const {
             origin_[2] + int64_t(key >> (2 * kAxisBits))};
 }
 
+namespace {
+
+// Sorts pieces in parallel, then merges neighbouring pieces pairwise. The keys are unique (cell key, input index),
+// so there is one sorted order and the result does not depend on how many pieces there were.
+void sort_in_parallel(std::vector<std::pair<uint64_t, uint32_t>>& items, int threads) {
+    const int64_t n = static_cast<int64_t>(items.size());
+    const int64_t pieces = std::max<int64_t>(1, std::min<int64_t>(resolve_threads(threads), n / 65536));
+    if (pieces <= 1) {
+        std::sort(items.begin(), items.end());
+        return;
+    }
+    auto bound = [&](int64_t p) { return items.begin() + std::min(n, n * p / pieces); };
+    parallel_for(pieces, threads, [&](int64_t p) { std::sort(bound(p), bound(p + 1)); });
+    for (int64_t width = 1; width < pieces; width *= 2) {
+        const int64_t groups = (pieces + 2 * width - 1) / (2 * width);
+        parallel_for(groups, threads, [&](int64_t g) {
+            const int64_t first = 2 * width * g, middle = std::min(pieces, first + width), last = std::min(pieces, first + 2 * width);
+            if (middle < last) std::inplace_merge(bound(first), bound(middle), bound(last));
+        });
+    }
+}
+
+}  // namespace
+
 ParticleGrid::ParticleGrid(const PositionsView& input, double cell_size, int threads, const std::vector<uint8_t>* keep)
     : cell_size_(cell_size) {
     if (!(cell_size > 0.0) || !std::isfinite(cell_size)) throw InputError("cell size must be positive and finite, got " + std::to_string(cell_size));
@@ -70,7 +94,7 @@ ParticleGrid::ParticleGrid(const PositionsView& input, double cell_size, int thr
     parallel_for(static_cast<int64_t>(m), threads, [&](int64_t s) {
         order[s] = {pack(cells[3 * s], cells[3 * s + 1], cells[3 * s + 2]), selected[s]};
     }, 4096);
-    std::sort(order.begin(), order.end());
+    sort_in_parallel(order, threads);
 
     positions_.resize(3 * m);
     original_index_.resize(m);

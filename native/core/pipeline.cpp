@@ -82,16 +82,20 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         const std::size_t removed = mesh_cleanup(mesh, options.reconstruction.cube_edge(), post.mesh_cleanup_snap_distance, threads);
         stats.set_count("cleanup_removed_vertices", static_cast<double>(removed));
     }
+    MeshAdjacency adjacency;
+    bool have_adjacency = false;
     if (post.decimate_barnacles) {
         StageTimer timer(&stats, "decimation");
-        const std::size_t removed = decimate_barnacles(mesh, threads);
+        const std::size_t removed = decimate_barnacles(mesh, threads, &adjacency);
+        have_adjacency = adjacency.vertex_triangles.rows() == mesh.num_vertices() && mesh.num_vertices() > 0;
         stats.set_count("decimated_configurations", static_cast<double>(removed));
     }
 
     // From here on the topology stays as it is: one adjacency serves smoothing, restoration and normals.
-    StageTimer adjacency_timer(&stats, "adjacency");
-    const MeshAdjacency adjacency = build_adjacency(mesh, threads);
-    adjacency_timer.stop();
+    if (!have_adjacency) {
+        StageTimer adjacency_timer(&stats, "adjacency");
+        adjacency = build_adjacency(mesh, threads);
+    }
 
     std::vector<float> weights;
     const bool need_weights = (post.smoothing_iterations > 0 && post.smoothing_weights) || post.output_weights;
@@ -108,7 +112,7 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         const std::vector<float> smoothing_amount = post.smoothing_weights ? weights : std::vector<float>{};
         int32_t components = 0;
         const std::vector<int32_t> labels = component_labels(mesh, &components);
-        const std::vector<double> volumes = component_volumes(mesh, labels, components);
+        const std::vector<double> volumes = component_volumes(mesh, labels, components, threads);
         const std::vector<float> before = mesh.vertices;
         laplacian_smooth(mesh, adjacency, smoothing_amount, post.smoothing_iterations, post.smoothing_beta, threads);
         timer.stop();
@@ -121,7 +125,7 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
             restore_component_volumes(mesh, adjacency, labels, volumes, smoothing_amount, options.reconstruction.compact_support(),
                                       restoration_normal_iterations, threads);
         }
-        const std::size_t reverted = revert_collapsed_components(mesh, before, labels, components, volumes);
+        const std::size_t reverted = revert_collapsed_components(mesh, before, labels, components, volumes, threads);
         if (reverted) {
             stats.set_count("components_left_unsmoothed", static_cast<double>(reverted));
             restoration_normal_iterations = -1;  // reverted vertices moved: their normals are recomputed below

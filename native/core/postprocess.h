@@ -34,7 +34,10 @@ bool triangle_has_zero_area(const float* vertices, const int32_t* triangle);
 // ---- decimation (Sec. 3.3) ------------------------------------------------------------------------------------
 // Removes the "single vertex" and "double vertex" marching-cubes configurations with legal half-edge collapses
 // (link condition) of their one-rings into the centre vertices. Returns the number of configurations removed.
-std::size_t decimate_barnacles(TriMesh& mesh, int threads);
+// With final_adjacency, also hands over the adjacency of the resulting mesh when its last detection pass already
+// built it (left empty otherwise), so the caller need not build it again.
+struct MeshAdjacency;
+std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_adjacency = nullptr);
 // Counts the single-/double-vertex configurations present (for reports and tests).
 std::size_t count_single_vertex_configurations(const TriMesh& mesh);
 std::size_t count_double_vertex_configurations(const TriMesh& mesh);

@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "mesh_adjacency.h"
+#include "parallel.h"
 #include "postprocess.h"
 
 namespace meniscus {
@@ -17,6 +18,31 @@ int32_t find_root(std::vector<int32_t>& parent, int32_t v) {
         v = parent[v];
     }
     return v;
+}
+
+// Per-component sums of value(t) over triangles t, where component(t) names t's component. Triangles go in fixed
+// blocks (independent of the thread count), each block sums into its own row in triangle order and the rows are
+// added in block order, so the result is the same bits for any thread count. With very many components the rows
+// would cost too much memory: then one sequential pass (also in triangle order).
+constexpr int64_t kSumBlock = int64_t(1) << 16;
+constexpr int64_t kMaxSumCells = int64_t(1) << 22;  // 32 MiB of partial sums
+
+template <class Component, class Value>
+std::vector<double> sum_per_component(int64_t triangles, int32_t count, int threads, const Component& component, const Value& value) {
+    std::vector<double> total(static_cast<std::size_t>(count), 0.0);
+    const int64_t blocks = (triangles + kSumBlock - 1) / kSumBlock;
+    if (blocks <= 1 || blocks * count > kMaxSumCells) {
+        for (int64_t t = 0; t < triangles; ++t) total[component(t)] += value(t);
+        return total;
+    }
+    std::vector<double> partial(static_cast<std::size_t>(blocks * count), 0.0);
+    parallel_for(blocks, threads, [&](int64_t b) {
+        double* row = partial.data() + b * count;
+        for (int64_t t = b * kSumBlock; t < std::min(triangles, (b + 1) * kSumBlock); ++t) row[component(t)] += value(t);
+    });
+    for (int64_t b = 0; b < blocks; ++b)
+        for (int32_t c = 0; c < count; ++c) total[c] += partial[b * count + c];
+    return total;
 }
 
 }  // namespace
@@ -43,23 +69,23 @@ std::vector<int32_t> component_labels(const TriMesh& mesh, int32_t* count) {
     return labels;
 }
 
-std::vector<double> component_volumes(const TriMesh& mesh, const std::vector<int32_t>& labels, int32_t count) {
-    std::vector<double> volume(static_cast<std::size_t>(count), 0.0);
+std::vector<double> component_volumes(const TriMesh& mesh, const std::vector<int32_t>& labels, int32_t count, int threads) {
     // Relative to each component's first vertex: keeps the sum accurate far from the origin.
     std::vector<int32_t> reference(static_cast<std::size_t>(count), -1);
     for (std::size_t v = 0; v < labels.size(); ++v)
         if (reference[labels[v]] < 0) reference[labels[v]] = static_cast<int32_t>(v);
-    for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
-        const int32_t* tri = &mesh.triangles[3 * t];
-        const int32_t c = labels[tri[0]];
-        const float* o = &mesh.vertices[3 * reference[c]];
-        double p[3][3];
-        for (int i = 0; i < 3; ++i)
-            for (int k = 0; k < 3; ++k) p[i][k] = double(mesh.vertices[3 * tri[i] + k]) - double(o[k]);
-        volume[c] += (p[0][0] * (p[1][1] * p[2][2] - p[1][2] * p[2][1]) - p[0][1] * (p[1][0] * p[2][2] - p[1][2] * p[2][0]) +
-                      p[0][2] * (p[1][0] * p[2][1] - p[1][1] * p[2][0])) / 6.0;
-    }
-    return volume;
+    const int32_t* tris = mesh.triangles.data();
+    return sum_per_component(
+        static_cast<int64_t>(mesh.num_triangles()), count, threads, [&](int64_t t) { return labels[tris[3 * t]]; },
+        [&](int64_t t) {
+            const int32_t* tri = tris + 3 * t;
+            const float* o = &mesh.vertices[3 * static_cast<std::size_t>(reference[labels[tri[0]]])];
+            double p[3][3];
+            for (int i = 0; i < 3; ++i)
+                for (int k = 0; k < 3; ++k) p[i][k] = double(mesh.vertices[3 * static_cast<std::size_t>(tri[i]) + k]) - double(o[k]);
+            return (p[0][0] * (p[1][1] * p[2][2] - p[1][2] * p[2][1]) - p[0][1] * (p[1][0] * p[2][2] - p[1][2] * p[2][0]) +
+                    p[0][2] * (p[1][0] * p[2][1] - p[1][1] * p[2][0])) / 6.0;
+        });
 }
 
 void restore_component_volumes(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<int32_t>& labels,
@@ -75,20 +101,24 @@ void restore_component_volumes(TriMesh& mesh, const MeshAdjacency& adjacency, co
     // Volume is close to linear in the offset for offsets small against the feature size: two Newton steps
     // bring it within a small fraction of a percent.
     for (int step = 0; step < 2; ++step) {
-        const std::vector<double> volume = component_volumes(mesh, labels, count);
+        const std::vector<double> volume = component_volumes(mesh, labels, count, threads);
         // d volume / d s = sum_i amount_i * A_i, with A_i a third of the incident triangle areas.
-        std::vector<double> rate(static_cast<std::size_t>(count), 0.0);
-        for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
-            const int32_t* tri = &mesh.triangles[3 * t];
-            const float* a = &mesh.vertices[3 * tri[0]];
-            const float* b = &mesh.vertices[3 * tri[1]];
-            const float* c = &mesh.vertices[3 * tri[2]];
-            const double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
-            const double w[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
-            const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-            const double third_area = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / 6.0;
-            for (int i = 0; i < 3; ++i) rate[labels[tri[0]]] += third_area * (amount.empty() ? 1.0 : double(amount[tri[i]]));
-        }
+        const int32_t* tris = mesh.triangles.data();
+        const std::vector<double> rate = sum_per_component(
+            static_cast<int64_t>(mesh.num_triangles()), count, threads, [&](int64_t t) { return labels[tris[3 * t]]; },
+            [&](int64_t t) {
+                const int32_t* tri = tris + 3 * t;
+                const float* a = &mesh.vertices[3 * static_cast<std::size_t>(tri[0])];
+                const float* b = &mesh.vertices[3 * static_cast<std::size_t>(tri[1])];
+                const float* c = &mesh.vertices[3 * static_cast<std::size_t>(tri[2])];
+                const double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
+                const double w[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
+                const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+                const double third_area = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / 6.0;
+                double sum = 0.0;
+                for (int i = 0; i < 3; ++i) sum += third_area * (amount.empty() ? 1.0 : double(amount[tri[i]]));
+                return sum;
+            });
         std::vector<double> offset(static_cast<std::size_t>(count), 0.0);
         bool any = false;
         for (int32_t c = 0; c < count; ++c) {
@@ -101,19 +131,27 @@ void restore_component_volumes(TriMesh& mesh, const MeshAdjacency& adjacency, co
             any = any || s != 0.0;
         }
         if (!any) break;
-        for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
-            const double s = offset[labels[v]] * (amount.empty() ? 1.0 : double(amount[v]));
-            for (int k = 0; k < 3; ++k) mesh.vertices[3 * v + k] = static_cast<float>(mesh.vertices[3 * v + k] + s * mesh.normals[3 * v + k]);
-        }
+        parallel_blocks(static_cast<int64_t>(mesh.num_vertices()), threads, kSumBlock, [&](int64_t begin, int64_t end) {
+            for (int64_t v = begin; v < end; ++v) {
+                const double s = offset[labels[v]] * (amount.empty() ? 1.0 : double(amount[v]));
+                for (int k = 0; k < 3; ++k)
+                    mesh.vertices[3 * v + k] = static_cast<float>(mesh.vertices[3 * v + k] + s * mesh.normals[3 * v + k]);
+            }
+        });
     }
 }
 
 std::size_t revert_collapsed_components(TriMesh& mesh, const std::vector<float>& before, const std::vector<int32_t>& labels,
-                                        int32_t count, const std::vector<double>& volumes_before) {
+                                        int32_t count, const std::vector<double>& volumes_before, int threads) {
     std::vector<uint8_t> collapsed(static_cast<std::size_t>(count), 0);
-    for (std::size_t t = 0; t < mesh.num_triangles(); ++t)
-        if (triangle_has_zero_area(mesh.vertices.data(), &mesh.triangles[3 * t])) collapsed[labels[mesh.triangles[3 * t]]] = 1;
-    const std::vector<double> volumes = component_volumes(mesh, labels, count);
+    const int64_t nt = static_cast<int64_t>(mesh.num_triangles());
+    std::vector<uint8_t> zero_area(static_cast<std::size_t>(nt), 0);
+    parallel_blocks(nt, threads, kSumBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t t = begin; t < end; ++t) zero_area[t] = triangle_has_zero_area(mesh.vertices.data(), &mesh.triangles[3 * t]);
+    });
+    for (int64_t t = 0; t < nt; ++t)
+        if (zero_area[t]) collapsed[labels[mesh.triangles[3 * t]]] = 1;
+    const std::vector<double> volumes = component_volumes(mesh, labels, count, threads);
     for (int32_t c = 0; c < count; ++c)
         if (volumes_before[c] != 0.0 && volumes[c] * volumes_before[c] <= 0.0) collapsed[c] = 1;  // turned inside out
     std::size_t reverted = 0;

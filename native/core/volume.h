@@ -15,8 +15,9 @@ namespace meniscus {
 // so deterministic) and their count. Unreferenced vertices get their own labels.
 std::vector<int32_t> component_labels(const TriMesh& mesh, int32_t* count);
 
-// Signed enclosed volume per component (divergence theorem, in double, in triangle order).
-std::vector<double> component_volumes(const TriMesh& mesh, const std::vector<int32_t>& labels, int32_t count);
+// Signed enclosed volume per component (divergence theorem, in double). Summed over fixed blocks of triangles,
+// blocks added in order: the same bits for any thread count.
+std::vector<double> component_volumes(const TriMesh& mesh, const std::vector<int32_t>& labels, int32_t count, int threads = 1);
 
 // Moves vertices along their smoothed area-weighted normals (normal_iterations of Eq. 12) by s_c * amount_i so
 // that component c's volume returns to target[c]; amount empty means 1 everywhere. |s_c| is capped at
@@ -31,6 +32,6 @@ void restore_component_volumes(TriMesh& mesh, const MeshAdjacency& adjacency, co
 // line. Such a component gets its positions from `before` back: smoothing never leaves a degenerate triangle or
 // an inverted component. Returns the number of components reverted.
 std::size_t revert_collapsed_components(TriMesh& mesh, const std::vector<float>& before, const std::vector<int32_t>& labels,
-                                        int32_t count, const std::vector<double>& volumes_before);
+                                        int32_t count, const std::vector<double>& volumes_before, int threads = 1);
 
 }  // namespace meniscus

@@ -478,3 +478,21 @@ TEST_CASE("mesh cleanup merges vertices sharing a lattice point", "[post]") {
     CHECK(limited < removed);
     CHECK(check_mesh(fresh).ok());
 }
+
+TEST_CASE("decimation hands over the adjacency of the mesh it leaves", "[post]") {
+    auto same = [](const CsrList& a, const CsrList& b) { return a.offsets == b.offsets && a.items == b.items; };
+    std::size_t singles = 0, doubles = 0;
+    TriMesh changed = barnacle_sphere(singles, doubles);
+    MeshAdjacency handed;
+    REQUIRE(decimate_barnacles(changed, 2, &handed) > 0);
+    const MeshAdjacency rebuilt = build_adjacency(changed, 1);
+    REQUIRE(handed.vertex_triangles.rows() == changed.num_vertices());
+    CHECK(same(handed.vertex_triangles, rebuilt.vertex_triangles));
+    CHECK(same(handed.vertex_neighbours, rebuilt.vertex_neighbours));
+
+    TriMesh unchanged = make_icosphere(3);  // nothing to decimate: the detection pass's adjacency is handed over
+    REQUIRE(decimate_barnacles(unchanged, 2, &handed) == 0);
+    const MeshAdjacency built = build_adjacency(unchanged, 1);
+    CHECK(same(handed.vertex_triangles, built.vertex_triangles));
+    CHECK(same(handed.vertex_neighbours, built.vertex_neighbours));
+}
