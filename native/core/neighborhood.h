@@ -60,10 +60,8 @@ public:
         std::array<std::pair<uint32_t, uint32_t>, 27> ranges{};
     };
 
-    // Calls visit(j, squared_distance) for every sorted particle j within `radius` (< cell_size) of x, in the same
-    // order as for_each_neighbor without a cache.
-    template <class Visit>
-    void for_each_neighbor(const float* x, float radius, NeighborCells& cache, Visit&& visit) const {
+    // The ranges of sorted particles in the 27 cells around x's cell, kept in `cache` while x stays in that cell.
+    const NeighborCells& neighbor_cells(const float* x, NeighborCells& cache) const {
         const auto c = cell_of(x);
         if (c != cache.cell) {
             cache.cell = c;
@@ -71,6 +69,14 @@ public:
             for_each_cell_in_box({c[0] - 1, c[1] - 1, c[2] - 1}, {c[0] + 1, c[1] + 1, c[2] + 1},
                                  [&](std::size_t cell) { cache.ranges[cache.count++] = {cell_start_[cell], cell_start_[cell + 1]}; });
         }
+        return cache;
+    }
+
+    // Calls visit(j, squared_distance) for every sorted particle j within `radius` (< cell_size) of x, in the same
+    // order as for_each_neighbor without a cache.
+    template <class Visit>
+    void for_each_neighbor(const float* x, float radius, NeighborCells& cache, Visit&& visit) const {
+        neighbor_cells(x, cache);
         const float r2 = radius * radius;
         for (int k = 0; k < cache.count; ++k)
             for (std::size_t j = cache.ranges[k].first; j < cache.ranges[k].second; ++j) {

@@ -8,6 +8,10 @@
 #include <memory>
 #include <string>
 
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
 #include "errors.h"
 #include "kernel.h"
 #include "marching_cubes.h"
@@ -71,6 +75,32 @@ bool crosses_threshold(const std::vector<float>& values, float threshold) {
     return false;
 }
 
+// Adds factor * W-shape(q) to row[0 .. n) with q = sqrt(dyz + dx2[i]) / H. With a = max(1 - q, 0) and
+// b = max(1 - 2q, 0) the cubic spline is 2a^3 - b^3 on all of [0, 1] and exactly 0 beyond: no branch. Written with
+// SSE intrinsics where available because the compiler turns the max into four instructions (a blend, for NaN
+// semantics the values here cannot have); the scalar tail does the same operations in the same order, so every
+// point gets the same bits either way.
+inline float spline_shape(float q) {
+    const float a = std::max(1.0f - q, 0.0f), b = std::max(1.0f - 2.0f * q, 0.0f);
+    return 2.0f * a * a * a - b * b * b;
+}
+
+inline void splat_row(float* row, const float* dx2, int n, float dyz, float inverse_support, float factor) {
+    int i = 0;
+#if defined(__SSE2__)
+    const __m128 dyz4 = _mm_set1_ps(dyz), inverse4 = _mm_set1_ps(inverse_support), factor4 = _mm_set1_ps(factor);
+    const __m128 one = _mm_set1_ps(1.0f), two = _mm_set1_ps(2.0f), zero = _mm_setzero_ps();
+    for (; i + 4 <= n; i += 4) {
+        const __m128 q = _mm_mul_ps(_mm_sqrt_ps(_mm_add_ps(dyz4, _mm_loadu_ps(dx2 + i))), inverse4);
+        const __m128 a = _mm_max_ps(_mm_sub_ps(one, q), zero);
+        const __m128 b = _mm_max_ps(_mm_sub_ps(one, _mm_mul_ps(two, q)), zero);
+        const __m128 shape = _mm_sub_ps(_mm_mul_ps(_mm_mul_ps(_mm_mul_ps(two, a), a), a), _mm_mul_ps(_mm_mul_ps(b, b), b));
+        _mm_storeu_ps(row + i, _mm_add_ps(_mm_loadu_ps(row + i), _mm_mul_ps(factor4, shape)));
+    }
+#endif
+    for (; i < n; ++i) row[i] += factor * spline_shape(std::sqrt(dyz + dx2[i]) * inverse_support);
+}
+
 class ParticleSampler {
 public:
     ParticleSampler(const SurfaceReconstruction& r, const CubicSplineKernel& kernel)
@@ -119,18 +149,7 @@ public:
                     for (int iy = 0; iy < ny; ++iy) {
                         const float dyz = s.dz2[iz] + s.dy2[iy];
                         if (dyz >= support_squared) continue;
-                        float* row = &s.values[point_index(ox, oy + iy, oz + iz)];
-                        const float* dx2 = s.dx2.data();
-                        // Branch-free so that it vectorises: with a = max(1 - q, 0) and b = max(1 - 2q, 0) the
-                        // cubic spline is 2a^3 - b^3 on all of [0, 1] and exactly 0 beyond the support.
-                        for (int ix = 0; ix < nx; ++ix) {
-                            const float q = std::sqrt(dyz + dx2[ix]) * inverse_support;
-                            float a = 1.0f - q, b = 1.0f - 2.0f * q;
-                            a = a > 0.0f ? a : 0.0f;
-                            b = b > 0.0f ? b : 0.0f;
-                            const float shape = 2.0f * a * a * a - b * b * b;
-                            row[ix] += factor * shape;
-                        }
+                        splat_row(&s.values[point_index(ox, oy + iy, oz + iz)], s.dx2.data(), nx, dyz, inverse_support, factor);
                     }
                 }
             }
@@ -335,6 +354,26 @@ TriMesh mesh_bricks(const std::vector<Coords>& bricks, const Sampler& sample, do
     return mesh;
 }
 
+// Sorted particle coordinates as x, y, z arrays padded by one block of kLanes, for neighbour loops that visit
+// candidates kLanes at a time without a branch: only about 15 % of the particles of the 27 cells around a point
+// lie within the support, and a branch per candidate mispredicts too often. Lane l sums the candidates
+// j = l (mod kLanes) of each range and the lanes are added in order at the end: the same sum for any thread count.
+constexpr int kLanes = 8;
+
+struct LanePositions {
+    std::vector<float> x, y, z;
+    explicit LanePositions(const ParticleGrid& grid) : x(grid.size() + kLanes), y(grid.size() + kLanes), z(grid.size() + kLanes) {
+        for (std::size_t j = 0; j < grid.size(); ++j) x[j] = grid.position(j)[0], y[j] = grid.position(j)[1], z[j] = grid.position(j)[2];
+    }
+};
+
+// A per-particle array padded by one block, so that lane loops may read past the last particle.
+std::vector<float> padded(const std::vector<float>& values) {
+    std::vector<float> out(values.size() + kLanes, 0.0f);
+    std::copy(values.begin(), values.end(), out.begin());
+    return out;
+}
+
 // Densities (rho_j / m_j = W(0) + sum_k W_jk, so that V_j = m_j / rho_j needs no rest density) and the hat-weighted
 // neighbour counts of Eq. 10-11 with h = H, in one pass over the cell neighbourhoods.
 void compute_particle_quantities(SurfaceReconstruction& r, const CubicSplineKernel& kernel, int threads) {
@@ -345,13 +384,8 @@ void compute_particle_quantities(SurfaceReconstruction& r, const CubicSplineKern
     const float support_squared = kernel.support_squared();
     const float inverse_support = 1.0f / kernel.support();
     const float normalisation = kernel.value(0.0f);  // W(0) = 8 / (pi H^3): shapes are summed, scaled once
-    // Coordinates split into x, y, z arrays padded by one block, so that neighbours are visited kLanes at a time
-    // in a branch-free loop the compiler vectorises: only about 15 % of the particles of the 27 cells lie within
-    // the support, and a branch per candidate mispredicts too often. Lane l sums the candidates j = l (mod
-    // kLanes) of each range, and the lanes are added in order at the end: the same sum for any thread count.
-    constexpr int kLanes = 8;
-    std::vector<float> xs(n + kLanes, 0.0f), ys(n + kLanes, 0.0f), zs(n + kLanes, 0.0f);
-    for (std::size_t j = 0; j < n; ++j) xs[j] = grid.position(j)[0], ys[j] = grid.position(j)[1], zs[j] = grid.position(j)[2];
+    const LanePositions lanes(grid);
+    const float *xs = lanes.x.data(), *ys = lanes.y.data(), *zs = lanes.z.data();
     parallel_for(static_cast<int64_t>(grid.num_cells()), threads, [&](int64_t cell) {
         const auto c = grid.cell_coords(static_cast<std::size_t>(cell));
         std::array<std::pair<std::size_t, std::size_t>, 27> ranges;
@@ -367,20 +401,14 @@ void compute_particle_quantities(SurfaceReconstruction& r, const CubicSplineKern
                 for (std::size_t block = ranges[k].first; block < end; block += kLanes) {
                     const int valid_lanes = static_cast<int>(std::min<std::size_t>(kLanes, end - block));
                     const int self_lane = i >= block && i < block + kLanes ? static_cast<int>(i - block) : -1;
-                    const float* bx = xs.data() + block;
-                    const float* by = ys.data() + block;
-                    const float* bz = zs.data() + block;
+                    const float *bx = xs + block, *by = ys + block, *bz = zs + block;
                     for (int l = 0; l < kLanes; ++l) {
                         const float dx = xi - bx[l], dy = yi - by[l], dz = zi - bz[l];
                         const float d2 = dx * dx + dy * dy + dz * dz;
                         // 1 or 0 as a factor rather than a branch (positions are finite, so 0 * value is 0).
                         const float counts = static_cast<float>((l < valid_lanes) & (l != self_lane) & (d2 < support_squared));
-                        // Cubic spline as 2a^3 - b^3 with a = max(1 - q, 0), b = max(1 - 2q, 0): valid on [0, 1].
                         const float q = std::sqrt(d2) * inverse_support;
-                        float a = 1.0f - q, b = 1.0f - 2.0f * q;
-                        a = a > 0.0f ? a : 0.0f;
-                        b = b > 0.0f ? b : 0.0f;
-                        shape_sum[l] += counts * (2.0f * a * a * a - b * b * b);
+                        shape_sum[l] += counts * spline_shape(q);
                         hat_sum[l] += counts * (1.0f - q);  // Eq. 10-11: linear hat with h = H
                     }
                 }
@@ -581,7 +609,47 @@ void interpolate_at_points(const SurfaceReconstruction& r, const float* values, 
 
 void interpolate_sorted_at_points(const SurfaceReconstruction& r, const float* values, int components, const std::vector<float>& points,
                                   std::vector<float>& out, int threads) {
-    interpolate(r, [&](std::size_t j) { return values + j * components; }, components, points, out, threads);
+    if (components != 1) {
+        interpolate(r, [&](std::size_t j) { return values + j * components; }, components, points, out, threads);
+        return;
+    }
+    // One value per particle (the feature weights' counts): the branch-free lane loop of the density pass.
+    const std::size_t n = points.size() / 3;
+    out.assign(n, 0.0f);
+    const CubicSplineKernel kernel(r.params.compact_support());
+    const float support_squared = kernel.support_squared(), inverse_support = 1.0f / kernel.support();
+    const LanePositions lanes(r.grid);
+    const std::vector<float> volumes = padded(r.volumes);
+    const std::vector<float> sorted_values = padded(std::vector<float>(values, values + r.grid.size()));
+    constexpr int64_t kBlock = 256;
+    parallel_for((static_cast<int64_t>(n) + kBlock - 1) / kBlock, threads, [&](int64_t block) {
+        ParticleGrid::NeighborCells cache;
+        const int64_t end = std::min<int64_t>(static_cast<int64_t>(n), (block + 1) * kBlock);
+        for (int64_t p = block * kBlock; p < end; ++p) {
+            const float px = points[3 * p], py = points[3 * p + 1], pz = points[3 * p + 2];
+            const ParticleGrid::NeighborCells& cells = r.grid.neighbor_cells(&points[3 * p], cache);
+            float weight_sum[kLanes] = {}, value_sum[kLanes] = {};
+            for (int k = 0; k < cells.count; ++k) {
+                const std::size_t range_end = cells.ranges[k].second;
+                for (std::size_t first = cells.ranges[k].first; first < range_end; first += kLanes) {
+                    const int valid_lanes = static_cast<int>(std::min<std::size_t>(kLanes, range_end - first));
+                    const float *bx = lanes.x.data() + first, *by = lanes.y.data() + first, *bz = lanes.z.data() + first;
+                    const float *bv = volumes.data() + first, *bw = sorted_values.data() + first;
+                    for (int l = 0; l < kLanes; ++l) {
+                        const float dx = px - bx[l], dy = py - by[l], dz = pz - bz[l];
+                        const float d2 = dx * dx + dy * dy + dz * dz;
+                        const float counts = static_cast<float>((l < valid_lanes) & (d2 < support_squared));
+                        const float w = counts * bv[l] * spline_shape(std::sqrt(d2) * inverse_support);  // V_j W_ij / W(0)
+                        weight_sum[l] += w;
+                        value_sum[l] += w * bw[l];
+                    }
+                }
+            }
+            float weight = 0.0f, value = 0.0f;
+            for (int l = 0; l < kLanes; ++l) weight += weight_sum[l], value += value_sum[l];
+            if (weight > 0.0f) out[static_cast<std::size_t>(p)] = value / weight;  // Eq. 7: 0th-order (Shepard) correction
+        }
+    });
 }
 
 std::vector<float> colour_field_normals(const SurfaceReconstruction& r, const std::vector<float>& points, int threads) {
