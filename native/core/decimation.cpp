@@ -301,33 +301,27 @@ std::vector<int32_t> compact_into(TriMesh& mesh, std::vector<int32_t>& triangles
     return new_index;
 }
 
-// The adjacency of the compacted mesh from the one of the working mesh it came from (same triangles, in the same
-// order): rows of removed vertices (which have no triangles left) dropped and neighbour indices renumbered. The
-// renumbering keeps the order, so rows stay sorted; a linear pass instead of a rebuild.
-MeshAdjacency renumber_adjacency(const MeshAdjacency& working, const std::vector<int32_t>& new_index, int threads) {
-    const int64_t nv = static_cast<int64_t>(new_index.size());
-    int64_t survivors = 0;
-    for (int64_t v = 0; v < nv; ++v) survivors += new_index[v] >= 0;
-    auto renumber_rows = [&](const CsrList& in, bool renumber_items) {
-        CsrList out;
-        out.offsets.assign(static_cast<std::size_t>(survivors) + 1, 0);
-        for (int64_t v = 0; v < nv; ++v)
-            if (new_index[v] >= 0) out.offsets[new_index[v] + 1] = in.size(v);
-        for (int64_t r = 0; r < survivors; ++r) out.offsets[r + 1] += out.offsets[r];
-        out.items.resize(static_cast<std::size_t>(out.offsets.back()));
-        parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-            for (int64_t v = begin; v < end; ++v) {
-                if (new_index[v] < 0) continue;
-                int32_t* dst = out.items.data() + out.offsets[new_index[v]];
-                for (int64_t k = in.begin(v); k < in.end(v); ++k) *dst++ = renumber_items ? new_index[in.items[k]] : in.items[k];
-            }
-        });
-        return out;
+// Turns the adjacency of the working mesh into the one of the compacted mesh (same triangles, in the same order),
+// in place: rows of removed vertices (which have no triangles left) dropped and neighbour indices renumbered. New
+// row starts never lie after old ones, so moving rows down in vertex order overwrites nothing still needed, and the
+// renumbering keeps the order, so rows stay sorted. A linear pass instead of a rebuild, without a second copy.
+void renumber_adjacency(MeshAdjacency& adjacency, const std::vector<int32_t>& new_index) {
+    auto renumber_rows = [&](CsrList& list, bool renumber_items) {
+        const int64_t nv = static_cast<int64_t>(list.rows());
+        int64_t write = 0, row = 0;
+        for (int64_t v = 0; v < nv; ++v) {
+            const int64_t begin = list.offsets[v], end = list.offsets[v + 1];  // offsets[v] is not yet overwritten
+            if (new_index[v] < 0) continue;
+            list.offsets[row] = write;
+            for (int64_t k = begin; k < end; ++k) list.items[write++] = renumber_items ? new_index[list.items[k]] : list.items[k];
+            ++row;
+        }
+        list.offsets[row] = write;
+        list.offsets.resize(static_cast<std::size_t>(row) + 1);
+        list.items.resize(static_cast<std::size_t>(write));
     };
-    MeshAdjacency result;
-    result.vertex_triangles = renumber_rows(working.vertex_triangles, false);
-    result.vertex_neighbours = renumber_rows(working.vertex_neighbours, true);
-    return result;
+    renumber_rows(adjacency.vertex_triangles, false);
+    renumber_rows(adjacency.vertex_neighbours, true);
 }
 
 // ---- barnacle detection ------------------------------------------------------------------------------------
@@ -550,7 +544,10 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
     }
     if (changed) {
         const std::vector<int32_t> new_index = compact_into(mesh, triangles, positions, removed, nullptr, threads);
-        if (final_adjacency && adjacency_is_current) *final_adjacency = renumber_adjacency(adj, new_index, threads);
+        if (final_adjacency && adjacency_is_current) {
+            renumber_adjacency(adj, new_index);
+            *final_adjacency = std::move(adj);
+        }
     } else if (final_adjacency && adjacency_is_current) {
         *final_adjacency = std::move(adj);
     }

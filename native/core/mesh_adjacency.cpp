@@ -239,6 +239,7 @@ int64_t find_edge(const EdgeMap& edges, int32_t a, int32_t b) {
 void umbrella_step(const CsrList& neighbours, const float* in, float* out, const float* weights, double factor,
                    int threads) {
     const int64_t nv = static_cast<int64_t>(neighbours.rows());
+    const float scale = static_cast<float>(factor);
     parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t i = begin; i < end; ++i) {
             const int32_t* row = neighbours.row(i);
@@ -249,16 +250,18 @@ void umbrella_step(const CsrList& neighbours, const float* in, float* out, const
                 yi[0] = xi[0], yi[1] = xi[1], yi[2] = xi[2];
                 continue;
             }
-            double sx = 0.0, sy = 0.0, sz = 0.0;
+            // Sum of the offsets to the neighbours: small numbers, so float keeps them accurate wherever the mesh
+            // lies (the absolute coordinates would lose bits far from the origin), and no conversions per neighbour.
+            float sx = 0.0f, sy = 0.0f, sz = 0.0f;
             for (int32_t k = 0; k < n; ++k) {
                 const float* xj = in + 3 * static_cast<int64_t>(row[k]);
-                sx += xj[0], sy += xj[1], sz += xj[2];
+                sx += xj[0] - xi[0], sy += xj[1] - xi[1], sz += xj[2] - xi[2];
             }
-            const double inv = 1.0 / n;  // uniform weights w_ij = 1 / |V_i| (Eq. 3)
-            const double step = weights ? factor * static_cast<double>(weights[i]) : factor;
-            yi[0] = static_cast<float>(xi[0] + step * (sx * inv - xi[0]));
-            yi[1] = static_cast<float>(xi[1] + step * (sy * inv - xi[1]));
-            yi[2] = static_cast<float>(xi[2] + step * (sz * inv - xi[2]));
+            // uniform weights w_ij = 1 / |V_i| (Eq. 3)
+            const float step = (weights ? scale * weights[i] : scale) / static_cast<float>(n);
+            yi[0] = xi[0] + step * sx;
+            yi[1] = xi[1] + step * sy;
+            yi[2] = xi[2] + step * sz;
         }
     });
 }

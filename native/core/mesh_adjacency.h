@@ -68,7 +68,7 @@ int64_t find_edge(const EdgeMap& edges, int32_t a, int32_t b);
 
 // One Jacobi step of the uniform umbrella operator on 3-float positions:
 // out_i = in_i + factor * w_i * (mean_{j in N(i)} in_j - in_i), with w_i = 1 when weights is null. Vertices
-// without neighbours keep their position. Arithmetic per vertex in double, independent of the thread count.
+// without neighbours keep their position. Offsets summed in float per vertex, independent of the thread count.
 void umbrella_step(const CsrList& neighbours, const float* in, float* out, const float* weights, double factor,
                    int threads);
 

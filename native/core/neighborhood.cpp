@@ -1,5 +1,6 @@
 #include "neighborhood.h"
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -27,23 +28,17 @@ std::array<int64_t, 3> ParticleGrid::cell_coords(std::size_t cell) const {
 
 namespace {
 
-// Sorts pieces in parallel, then merges neighbouring pieces pairwise. The keys are unique (cell key, input index),
-// so there is one sorted order and the result does not depend on how many pieces there were.
-void sort_in_parallel(std::vector<std::pair<uint64_t, uint32_t>>& items, int threads) {
-    const int64_t n = static_cast<int64_t>(items.size());
-    const int64_t pieces = std::max<int64_t>(1, std::min<int64_t>(resolve_threads(threads), n / 65536));
-    if (pieces <= 1) {
-        std::sort(items.begin(), items.end());
-        return;
-    }
-    auto bound = [&](int64_t p) { return items.begin() + std::min(n, n * p / pieces); };
-    parallel_for(pieces, threads, [&](int64_t p) { std::sort(bound(p), bound(p + 1)); });
-    for (int64_t width = 1; width < pieces; width *= 2) {
-        const int64_t groups = (pieces + 2 * width - 1) / (2 * width);
-        parallel_for(groups, threads, [&](int64_t g) {
-            const int64_t first = 2 * width * g, middle = std::min(pieces, first + width), last = std::min(pieces, first + 2 * width);
-            if (middle < last) std::inplace_merge(bound(first), bound(middle), bound(last));
-        });
+// Stable LSD radix sort of (dense cell index, input index) pairs by the cell index, 8 bits per pass over the bits
+// in use. The pairs arrive in input order, so the result is ordered by (cell, input index): a total order, the
+// same for any thread count. Several times faster than a comparison sort for a million particles.
+void radix_sort_by_cell(std::vector<std::pair<uint64_t, uint32_t>>& items, uint64_t largest_key) {
+    std::vector<std::pair<uint64_t, uint32_t>> buffer(items.size());
+    for (int shift = 0; shift < 64 && (largest_key >> shift) != 0; shift += 8) {
+        std::array<std::size_t, 257> start{};
+        for (const auto& item : items) ++start[((item.first >> shift) & 0xff) + 1];
+        for (int digit = 0; digit < 256; ++digit) start[digit + 1] += start[digit];
+        for (const auto& item : items) buffer[start[(item.first >> shift) & 0xff]++] = item;
+        items.swap(buffer);
     }
 }
 
@@ -90,11 +85,20 @@ ParticleGrid::ParticleGrid(const PositionsView& input, double cell_size, int thr
     }
 
     // Sort by (cell key, input index): a total order, so the result does not depend on the thread count.
+    // Sorted by a dense index of the cell in the bounding box of cells (z, then y, then x: the order of the packed
+    // keys), which needs only as many radix passes as its bits.
     std::vector<std::pair<uint64_t, uint32_t>> order(m);
+    const uint64_t ex = static_cast<uint64_t>(extent_[0]), ey = static_cast<uint64_t>(extent_[1]);
     parallel_for(static_cast<int64_t>(m), threads, [&](int64_t s) {
-        order[s] = {pack(cells[3 * s], cells[3 * s + 1], cells[3 * s + 2]), selected[s]};
+        const uint64_t x = static_cast<uint64_t>(cells[3 * s] - lo[0]), y = static_cast<uint64_t>(cells[3 * s + 1] - lo[1]),
+                       z = static_cast<uint64_t>(cells[3 * s + 2] - lo[2]);
+        order[s] = {(z * ey + y) * ex + x, selected[s]};
     }, 4096);
-    sort_in_parallel(order, threads);
+    radix_sort_by_cell(order, ex * ey * static_cast<uint64_t>(extent_[2]) - 1);
+    for (auto& item : order) {  // back to packed keys, which the cell lookups use
+        const uint64_t x = item.first % ex, y = item.first / ex % ey, z = item.first / ex / ey;
+        item.first = pack(static_cast<int64_t>(x) + lo[0], static_cast<int64_t>(y) + lo[1], static_cast<int64_t>(z) + lo[2]);
+    }
 
     positions_.resize(3 * m);
     original_index_.resize(m);

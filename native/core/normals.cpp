@@ -101,16 +101,21 @@ void smooth_normals(TriMesh& mesh, const MeshAdjacency& adjacency, int iteration
                 // do, so results match the reference. This is safe: the mean-of-neighbours operator has an
                 // eigenvalue -1 (a checkerboard oscillation that never decays) only on bipartite graphs, and a
                 // triangle mesh is never bipartite; n_i is still used as the fallback when the sum cancels.
-                double sum[3] = {0.0, 0.0, 0.0};
+                // Unit vectors, a handful per vertex: float sums are accurate enough and need no conversions.
+                float sum[3] = {0.0f, 0.0f, 0.0f};
                 for (int64_t k = neighbours.begin(i); k < neighbours.end(i); ++k) {
                     const float* nj = in + 3 * static_cast<int64_t>(neighbours.items[k]);
                     sum[0] += nj[0], sum[1] += nj[1], sum[2] += nj[2];
                 }
                 float* o = out + 3 * i;
-                if (!normalise_into(sum, o)) {
-                    const double own[3] = {in[3 * i], in[3 * i + 1], in[3 * i + 2]};
-                    if (!normalise_into(own, o)) o[0] = kFallback[0], o[1] = kFallback[1], o[2] = kFallback[2];
+                const float length_squared = sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2];
+                if (length_squared > 1e-12f && std::isfinite(length_squared)) {
+                    const float inverse = 1.0f / std::sqrt(length_squared);
+                    o[0] = sum[0] * inverse, o[1] = sum[1] * inverse, o[2] = sum[2] * inverse;
+                    continue;
                 }
+                const double own[3] = {in[3 * i], in[3 * i + 1], in[3 * i + 2]};
+                if (!normalise_into(own, o)) o[0] = kFallback[0], o[1] = kFallback[1], o[2] = kFallback[2];
             }
         });
         mesh.normals.swap(other);
