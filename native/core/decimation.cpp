@@ -474,6 +474,7 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
         TriMesh view;  // adjacency of the working triangles (removed vertices simply have no triangles)
         view.vertices.swap(positions);
         view.triangles.swap(triangles);
+        adj = MeshAdjacency{};  // release the previous pass's adjacency before building the next one
         adj = build_adjacency(view, threads);
         adjacency_is_current = true;
         positions.swap(view.vertices);
@@ -543,6 +544,11 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
         adjacency_is_current = false;
     }
     if (changed) {
+        claim = std::vector<int32_t>();
+        // compact_into replaces the mesh's positions and triangles without reading them: release them first, so
+        // that the working arrays and the adjacency handed over do not raise the memory peak.
+        mesh.vertices = std::vector<float>();
+        mesh.triangles = std::vector<int32_t>();
         const std::vector<int32_t> new_index = compact_into(mesh, triangles, positions, removed, nullptr, threads);
         if (final_adjacency && adjacency_is_current) {
             renumber_adjacency(adj, new_index);
