@@ -324,6 +324,63 @@ void renumber_adjacency(MeshAdjacency& adjacency, const std::vector<int32_t>& ne
     renumber_rows(adjacency.vertex_neighbours, true);
 }
 
+// The adjacency of the working mesh after a pass (deleted triangles dropped), from the one before it. Every
+// triangle a collapse rewrote or deleted has all its corners in the pass's claimed regions (a collapse n -> c only
+// touches triangles around n, whose corners are neighbours of n), so a vertex outside them keeps its neighbours
+// and its triangles, which only get their new numbers; rows of claimed vertices are recomputed from their current
+// fans. The same lists as a rebuild, in one linear pass.
+MeshAdjacency patch_adjacency(const MeshAdjacency& before, const CollapseMesh& work, const std::vector<int32_t>& triangles,
+                              const std::vector<uint8_t>& claimed, int threads) {
+    const std::vector<uint8_t>& deleted = work.deleted_triangles();
+    std::vector<int32_t> new_id(deleted.size(), -1);
+    int32_t next_id = 0;
+    for (std::size_t t = 0; t < deleted.size(); ++t)
+        if (!deleted[t]) new_id[t] = next_id++;
+    const int64_t nv = static_cast<int64_t>(claimed.size());
+    // Claimed vertices: current triangles (new numbers, ascending) and neighbours.
+    std::vector<int32_t> touched;
+    for (int64_t v = 0; v < nv; ++v)
+        if (claimed[v]) touched.push_back(static_cast<int32_t>(v));
+    std::vector<std::vector<int32_t>> fans(touched.size()), rings(touched.size());
+    parallel_blocks(static_cast<int64_t>(touched.size()), threads, 64, [&](int64_t begin, int64_t end) {
+        std::vector<int32_t> fan;
+        for (int64_t i = begin; i < end; ++i) {
+            const int32_t v = touched[i];
+            work.fan(v, fan);
+            std::vector<int32_t>& row = fans[i];
+            for (int32_t t : fan) {
+                const int32_t* c = triangles.data() + 3 * static_cast<int64_t>(new_id[t]);
+                if (c[0] == v || c[1] == v || c[2] == v) row.push_back(new_id[t]);
+            }
+            std::sort(row.begin(), row.end());
+            row.erase(std::unique(row.begin(), row.end()), row.end());
+            rings[i].resize(2 * row.size() + 1);
+            rings[i].resize(static_cast<std::size_t>(
+                collect_vertex_neighbours(triangles.data(), v, row.data(), static_cast<int32_t>(row.size()), rings[i].data())));
+        }
+    });
+    std::vector<int32_t> slot(static_cast<std::size_t>(nv), -1);
+    for (std::size_t i = 0; i < touched.size(); ++i) slot[touched[i]] = static_cast<int32_t>(i);
+    MeshAdjacency after;
+    auto assemble = [&](const CsrList& old, const std::vector<std::vector<int32_t>>& fresh, bool renumber, CsrList& out) {
+        out.offsets.assign(static_cast<std::size_t>(nv) + 1, 0);
+        for (int64_t v = 0; v < nv; ++v)
+            out.offsets[v + 1] = out.offsets[v] + (slot[v] >= 0 ? static_cast<int64_t>(fresh[slot[v]].size()) : old.size(v));
+        out.items.resize(static_cast<std::size_t>(out.offsets.back()));
+        parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+            for (int64_t v = begin; v < end; ++v) {
+                int32_t* dst = out.items.data() + out.offsets[v];
+                if (slot[v] >= 0) std::copy(fresh[slot[v]].begin(), fresh[slot[v]].end(), dst);
+                else
+                    for (int64_t k = old.begin(v); k < old.end(v); ++k) *dst++ = renumber ? new_id[old.items[k]] : old.items[k];
+            }
+        });
+    };
+    assemble(before.vertex_triangles, fans, true, after.vertex_triangles);
+    assemble(before.vertex_neighbours, rings, false, after.vertex_neighbours);
+    return after;
+}
+
 // ---- barnacle detection ------------------------------------------------------------------------------------
 
 bool is_single_centre(const MeshAdjacency& adj, int32_t v) {
@@ -470,15 +527,17 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
     constexpr int kMaxPasses = 10;
     MeshAdjacency adj;
     bool adjacency_is_current = false;  // adj describes the working triangles as they are now
-    for (int pass = 0; pass < kMaxPasses; ++pass) {
+    {
         TriMesh view;  // adjacency of the working triangles (removed vertices simply have no triangles)
         view.vertices.swap(positions);
         view.triangles.swap(triangles);
-        adj = MeshAdjacency{};  // release the previous pass's adjacency before building the next one
         adj = build_adjacency(view, threads);
         adjacency_is_current = true;
         positions.swap(view.vertices);
         triangles.swap(view.triangles);
+    }
+    for (int pass = 0; pass < kMaxPasses; ++pass) {
+        if (!adjacency_is_current) break;
 
         const std::vector<Candidate> candidates = find_candidates(adj, threads);
         if (candidates.empty()) break;
@@ -541,7 +600,14 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
         drop_deleted_triangles(triangles, work.deleted_triangles());
         changed = changed || pass_changed;
         if (!pass_changed) break;
-        adjacency_is_current = false;
+        if (pass + 1 < kMaxPasses) {
+            std::vector<uint8_t> claimed(claim.size());
+            for (std::size_t v = 0; v < claim.size(); ++v) claimed[v] = claim[v] >= pass_first_stamp;
+            MeshAdjacency patched = patch_adjacency(adj, work, triangles, claimed, threads);
+            adj = std::move(patched);
+        } else {
+            adjacency_is_current = false;
+        }
     }
     if (changed) {
         claim = std::vector<int32_t>();

@@ -90,6 +90,32 @@ CsrList build_vertex_triangles(const TriMesh& mesh, int threads) {
     return list;
 }
 
+int32_t collect_vertex_neighbours(const int32_t* tris, int32_t v, const int32_t* fan, int32_t fan_size, int32_t* out) {
+    // In a closed manifold fan the vertices following v in its triangles are already all neighbours, each once:
+    // sort just those, then add any preceding vertex not among them (open or non-manifold fans only), which
+    // halves the sorting work in the common case.
+    int32_t* const first = out;
+    for (int32_t k = 0; k < fan_size; ++k) {
+        const int32_t* t = tris + 3 * static_cast<int64_t>(fan[k]);
+        const int corner = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+        if (t[(corner + 1) % 3] != v) *out++ = t[(corner + 1) % 3];
+    }
+    sort_small(first, out);
+    out = std::unique(first, out);
+    int32_t* const sorted_end = out;
+    for (int32_t k = 0; k < fan_size; ++k) {
+        const int32_t* t = tris + 3 * static_cast<int64_t>(fan[k]);
+        const int corner = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+        const int32_t prev = t[(corner + 2) % 3];
+        if (prev != v && !std::binary_search(first, sorted_end, prev)) *out++ = prev;
+    }
+    if (out != sorted_end) {
+        sort_small(first, out);
+        out = std::unique(first, out);
+    }
+    return static_cast<int32_t>(out - first);
+}
+
 CsrList build_vertex_neighbours(const TriMesh& mesh, const CsrList& vt, int threads) {
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
     const int32_t* tris = mesh.triangles.data();
@@ -99,32 +125,8 @@ CsrList build_vertex_neighbours(const TriMesh& mesh, const CsrList& vt, int thre
     // size of v's triangle row), sort and deduplicate in place, then compact all rows into the result.
     std::unique_ptr<int32_t[]> raw(new int32_t[2 * vt.items.size() + 1]);  // uninitialised: every slot used is written
     parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t v = begin; v < end; ++v) {
-            // In a closed manifold fan the vertices following v in its triangles are already all neighbours,
-            // each once: sort just those, then add any preceding vertex not among them (open or non-manifold
-            // fans only), which halves the sorting work in the common case.
-            int32_t* first = raw.get() + 2 * vt.begin(v);
-            int32_t* out = first;
-            for (int64_t k = vt.begin(v); k < vt.end(v); ++k) {
-                const int32_t* t = tris + 3 * static_cast<int64_t>(vt.items[k]);
-                const int corner = t[0] == v ? 0 : t[1] == v ? 1 : 2;
-                if (t[(corner + 1) % 3] != v) *out++ = t[(corner + 1) % 3];
-            }
-            sort_small(first, out);
-            out = std::unique(first, out);
-            int32_t* const sorted_end = out;
-            for (int64_t k = vt.begin(v); k < vt.end(v); ++k) {
-                const int32_t* t = tris + 3 * static_cast<int64_t>(vt.items[k]);
-                const int corner = t[0] == v ? 0 : t[1] == v ? 1 : 2;
-                const int32_t prev = t[(corner + 2) % 3];
-                if (prev != v && !std::binary_search(first, sorted_end, prev)) *out++ = prev;
-            }
-            if (out != sorted_end) {
-                sort_small(first, out);
-                out = std::unique(first, out);
-            }
-            list.offsets[v + 1] = out - first;
-        }
+        for (int64_t v = begin; v < end; ++v)
+            list.offsets[v + 1] = collect_vertex_neighbours(tris, static_cast<int32_t>(v), vt.row(v), vt.size(v), raw.get() + 2 * vt.begin(v));
     });
     exclusive_scan_in_place(list.offsets);
     list.items.resize(static_cast<std::size_t>(list.offsets.back()));

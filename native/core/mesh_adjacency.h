@@ -50,6 +50,9 @@ void validate_mesh_arrays(const TriMesh& mesh, const std::string& where);
 CsrList build_vertex_triangles(const TriMesh& mesh, int threads);
 CsrList build_vertex_neighbours(const TriMesh& mesh, const CsrList& vertex_triangles, int threads);
 MeshAdjacency build_adjacency(const TriMesh& mesh, int threads);
+// The distinct other vertices of v's triangles fan[0 .. fan_size) (ids into tris, 3 per triangle), ascending, written
+// to out (room for 2 * fan_size); returns their count. One row of build_vertex_neighbours.
+int32_t collect_vertex_neighbours(const int32_t* tris, int32_t v, const int32_t* fan, int32_t fan_size, int32_t* out);
 EdgeMap build_edge_map(const MeshAdjacency& adjacency, int threads);
 
 // Edges of one vertex without building an EdgeMap: for vertex v, every (u, t, direction) where triangle t

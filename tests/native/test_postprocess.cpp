@@ -490,6 +490,15 @@ TEST_CASE("decimation hands over the adjacency of the mesh it leaves", "[post]")
     CHECK(same(handed.vertex_triangles, rebuilt.vertex_triangles));
     CHECK(same(handed.vertex_neighbours, rebuilt.vertex_neighbours));
 
+    // Neighbouring configurations are deferred to later passes, whose adjacency is patched rather than rebuilt.
+    TriMesh crowded = make_octasphere(1);
+    for (int32_t v = 0; v < 6; ++v) insert_single_configuration(crowded, v);
+    decimate_barnacles(crowded, 2, &handed);
+    const MeshAdjacency crowded_rebuilt = build_adjacency(crowded, 1);
+    REQUIRE(handed.vertex_triangles.rows() == crowded.num_vertices());
+    CHECK(same(handed.vertex_triangles, crowded_rebuilt.vertex_triangles));
+    CHECK(same(handed.vertex_neighbours, crowded_rebuilt.vertex_neighbours));
+
     TriMesh unchanged = make_icosphere(3);  // nothing to decimate: the detection pass's adjacency is handed over
     REQUIRE(decimate_barnacles(unchanged, 2, &handed) == 0);
     const MeshAdjacency built = build_adjacency(unchanged, 1);

@@ -12,6 +12,7 @@
 #include "io.h"
 #include "kernel.h"
 #include "marching_cubes.h"
+#include "mesh_adjacency.h"
 #include "neighborhood.h"
 #include "pipeline.h"
 #include "postprocess.h"
@@ -299,4 +300,33 @@ TEST_CASE("attributes are interpolated with the Shepard correction", "[reconstru
     }
     CHECK(worst < 1e-5);
     CHECK(mean_error < 0.05);  // within the kernel support (0.1)
+}
+
+TEST_CASE("decimation of real marching-cubes meshes hands over the adjacency a rebuild gives", "[reconstruction][post]") {
+    // Droplets (single particles and pairs) at c = 1.0: their blobs carry several barnacles each, close together,
+    // so later decimation passes run on patched adjacencies.
+    std::mt19937 random(7);
+    std::uniform_real_distribution<float> offset(0.0f, 0.05f);
+    std::normal_distribution<float> partner(0.0f, 0.025f);
+    std::vector<float> positions;
+    for (int i = 0; i < 10; ++i)
+        for (int j = 0; j < 10; ++j)
+            for (int k = 0; k < 2; ++k) {
+                const float c[3] = {i * 0.3f + offset(random), j * 0.3f + offset(random), k * 0.3f + offset(random)};
+                positions.insert(positions.end(), c, c + 3);
+                if ((i + j + k) % 2)
+                    for (int a = 0; a < 3; ++a) positions.push_back(c[a] + partner(random));
+            }
+    SurfaceReconstruction r = reconstruct_surface(PositionsView(positions.data(), positions.size() / 3), params(0.025, 1.0), {});
+    MeshAdjacency handed;
+    REQUIRE(decimate_barnacles(r.mesh, 2, &handed) > 5);
+    const MeshAdjacency rebuilt = build_adjacency(r.mesh, 1);
+    REQUIRE(handed.vertex_triangles.rows() == r.mesh.num_vertices());
+    CHECK(handed.vertex_triangles.offsets == rebuilt.vertex_triangles.offsets);
+    CHECK(handed.vertex_triangles.items == rebuilt.vertex_triangles.items);
+    CHECK(handed.vertex_neighbours.offsets == rebuilt.vertex_neighbours.offsets);
+    CHECK(handed.vertex_neighbours.items == rebuilt.vertex_neighbours.items);
+    CHECK(count_single_vertex_configurations(r.mesh) == 0);
+    CHECK(count_double_vertex_configurations(r.mesh) == 0);
+    CHECK(check_mesh(r.mesh).ok());
 }
