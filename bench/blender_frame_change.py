@@ -271,7 +271,7 @@ def write_report(json_paths, output=RESULTS):
         f"with a `velocity` attribute (legacy VTK, cached in `build/bench/blender_frame_change/`), the add-on's "
         f"default pipeline (r = {RADIUS}, l = 2, t = 0.6, barnacle decimation, 25 weighted smoothing iterations, "
         f"volume restoration, 10 normal-smoothing iterations, all threads) at viewport = render cube size "
-        f"**{CUBE_SIZE}**. 2 cores, shared with other jobs (load averages in the JSON), so single numbers vary.", "",
+        f"**{CUBE_SIZE}**. 2 cores (load averages in the JSON; the run itself keeps both busy).", "",
         "*core* = `meniscus.api.reconstruct` (the C++ core and its pybind11 call), *read* = "
         "`meniscus.api.read_particles`, both timed inside the frame change; *Blender* = total − core − read "
         "(mesh write + the add-on's glue + depsgraph evaluation and the rest of frame_set). Each column is a median "
