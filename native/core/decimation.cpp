@@ -526,19 +526,16 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
     // reflects the collapses already made; a few passes reach the fixed point.
     constexpr int kMaxPasses = 10;
     MeshAdjacency adj;
-    bool adjacency_is_current = false;  // adj describes the working triangles as they are now
     {
         TriMesh view;  // adjacency of the working triangles (removed vertices simply have no triangles)
         view.vertices.swap(positions);
         view.triangles.swap(triangles);
         adj = build_adjacency(view, threads);
-        adjacency_is_current = true;
         positions.swap(view.vertices);
         triangles.swap(view.triangles);
     }
+    bool adjacency_is_current = true;  // adj describes the working triangles as they are now
     for (int pass = 0; pass < kMaxPasses; ++pass) {
-        if (!adjacency_is_current) break;
-
         const std::vector<Candidate> candidates = find_candidates(adj, threads);
         if (candidates.empty()) break;
 
@@ -600,13 +597,11 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
         drop_deleted_triangles(triangles, work.deleted_triangles());
         changed = changed || pass_changed;
         if (!pass_changed) break;
-        if (pass + 1 < kMaxPasses) {
+        adjacency_is_current = pass + 1 < kMaxPasses;  // the last pass's collapses are not patched in
+        if (adjacency_is_current) {
             std::vector<uint8_t> claimed(claim.size());
             for (std::size_t v = 0; v < claim.size(); ++v) claimed[v] = claim[v] >= pass_first_stamp;
-            MeshAdjacency patched = patch_adjacency(adj, work, triangles, claimed, threads);
-            adj = std::move(patched);
-        } else {
-            adjacency_is_current = false;
+            adj = patch_adjacency(adj, work, triangles, claimed, threads);
         }
     }
     if (changed) {
@@ -616,13 +611,9 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
         mesh.vertices = std::vector<float>();
         mesh.triangles = std::vector<int32_t>();
         const std::vector<int32_t> new_index = compact_into(mesh, triangles, positions, removed, nullptr, threads);
-        if (final_adjacency && adjacency_is_current) {
-            renumber_adjacency(adj, new_index);
-            *final_adjacency = std::move(adj);
-        }
-    } else if (final_adjacency && adjacency_is_current) {
-        *final_adjacency = std::move(adj);
+        if (final_adjacency && adjacency_is_current) renumber_adjacency(adj, new_index);
     }
+    if (final_adjacency && adjacency_is_current) *final_adjacency = std::move(adj);
     return removed_configurations;
 }
 

@@ -84,9 +84,9 @@ ParticleGrid::ParticleGrid(const PositionsView& input, double cell_size, int thr
                              "): is the particle radius in the units of the positions, or are there stray particles far away?");
     }
 
-    // Sort by (cell key, input index): a total order, so the result does not depend on the thread count.
-    // Sorted by a dense index of the cell in the bounding box of cells (z, then y, then x: the order of the packed
-    // keys), which needs only as many radix passes as its bits.
+    // Sorted by (cell, input index): a total order, so the result does not depend on the thread count. The radix
+    // sort runs on a dense index of the cell in the bounding box of cells (z, then y, then x: the order of the packed
+    // keys), which needs only as many passes as its bits.
     std::vector<std::pair<uint64_t, uint32_t>> order(m);
     const uint64_t ex = static_cast<uint64_t>(extent_[0]), ey = static_cast<uint64_t>(extent_[1]);
     parallel_for(static_cast<int64_t>(m), threads, [&](int64_t s) {

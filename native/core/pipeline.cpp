@@ -106,7 +106,7 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         stats.set_count("weights_normalization", result.weights_normalization);
     }
     if (post.output_weights) mesh.attributes.push_back({"weights", 1, weights});
-    int restoration_normal_iterations = -1;  // the smoothing count of the normals volume restoration left, if any
+    bool normals_from_restoration = false;  // volume restoration left the normals the output asks for
     if (post.smoothing_iterations > 0) {
         StageTimer timer(&stats, "smoothing");
         const std::vector<float> smoothing_amount = post.smoothing_weights ? weights : std::vector<float>{};
@@ -120,15 +120,14 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
             StageTimer restoration_timer(&stats, "volume restoration");
             // Offsets along the smoothed normals the output asks for (Eq. 12 with its iteration count), which then
             // are the output normals; otherwise (SPH, unsmoothed or no normals) along 10 smoothing iterations.
-            const bool reuse = post.normals && !post.sph_normals && post.normal_smoothing_iterations > 0;
-            restoration_normal_iterations = reuse ? post.normal_smoothing_iterations : 10;
+            normals_from_restoration = post.normals && !post.sph_normals && post.normal_smoothing_iterations > 0;
             restore_component_volumes(mesh, adjacency, labels, volumes, smoothing_amount, options.reconstruction.compact_support(),
-                                      restoration_normal_iterations, threads);
+                                      normals_from_restoration ? post.normal_smoothing_iterations : 10, threads);
         }
         const std::size_t reverted = revert_collapsed_components(mesh, before, labels, components, volumes, threads);
         if (reverted) {
             stats.set_count("components_left_unsmoothed", static_cast<double>(reverted));
-            restoration_normal_iterations = -1;  // reverted vertices moved: their normals are recomputed below
+            normals_from_restoration = false;  // reverted vertices moved: their normals are recomputed below
         }
     }
 
@@ -136,7 +135,7 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         StageTimer timer(&stats, "normals");
         if (post.sph_normals) {
             mesh.normals = colour_field_normals(r, mesh.vertices, threads);
-        } else if (restoration_normal_iterations != post.normal_smoothing_iterations || restoration_normal_iterations <= 0) {
+        } else if (!normals_from_restoration) {
             compute_area_weighted_normals(mesh, adjacency, threads);
             if (post.normal_smoothing_iterations > 0) smooth_normals(mesh, adjacency, post.normal_smoothing_iterations, threads);
         }

@@ -20,15 +20,18 @@ int32_t find_root(std::vector<int32_t>& parent, int32_t v) {
     return v;
 }
 
-// Per-component sums of value(t) over triangles t, where component(t) names t's component. Triangles go in fixed
-// blocks (independent of the thread count), each block sums into its own row in triangle order and the rows are
-// added in block order, so the result is the same bits for any thread count. With very many components the rows
-// would cost too much memory: then one sequential pass (also in triangle order).
+// Per-component sums of value(t) over the triangles t of mesh, a triangle counting for the component of its first
+// corner. Triangles go in fixed blocks (independent of the thread count), each block sums into its own row in
+// triangle order and the rows are added in block order, so the result is the same bits for any thread count. With
+// very many components the rows would cost too much memory: then one sequential pass (also in triangle order).
 constexpr int64_t kSumBlock = int64_t(1) << 16;
 constexpr int64_t kMaxSumCells = int64_t(1) << 22;  // 32 MiB of partial sums
 
-template <class Component, class Value>
-std::vector<double> sum_per_component(int64_t triangles, int32_t count, int threads, const Component& component, const Value& value) {
+template <class Value>
+std::vector<double> sum_per_component(const TriMesh& mesh, const std::vector<int32_t>& labels, int32_t count, int threads,
+                                      const Value& value) {
+    const int64_t triangles = static_cast<int64_t>(mesh.num_triangles());
+    auto component = [&](int64_t t) { return labels[mesh.triangles[3 * static_cast<std::size_t>(t)]]; };
     std::vector<double> total(static_cast<std::size_t>(count), 0.0);
     const int64_t blocks = (triangles + kSumBlock - 1) / kSumBlock;
     if (blocks <= 1 || blocks * count > kMaxSumCells) {
@@ -75,29 +78,28 @@ std::vector<double> component_volumes(const TriMesh& mesh, const std::vector<int
     for (std::size_t v = 0; v < labels.size(); ++v)
         if (reference[labels[v]] < 0) reference[labels[v]] = static_cast<int32_t>(v);
     const int32_t* tris = mesh.triangles.data();
-    return sum_per_component(
-        static_cast<int64_t>(mesh.num_triangles()), count, threads, [&](int64_t t) { return labels[tris[3 * t]]; },
-        [&](int64_t t) {
-            const int32_t* tri = tris + 3 * t;
-            const float* o = &mesh.vertices[3 * static_cast<std::size_t>(reference[labels[tri[0]]])];
-            double p[3][3];
-            for (int i = 0; i < 3; ++i)
-                for (int k = 0; k < 3; ++k) p[i][k] = double(mesh.vertices[3 * static_cast<std::size_t>(tri[i]) + k]) - double(o[k]);
-            return (p[0][0] * (p[1][1] * p[2][2] - p[1][2] * p[2][1]) - p[0][1] * (p[1][0] * p[2][2] - p[1][2] * p[2][0]) +
-                    p[0][2] * (p[1][0] * p[2][1] - p[1][1] * p[2][0])) / 6.0;
-        });
+    return sum_per_component(mesh, labels, count, threads, [&](int64_t t) {
+        const int32_t* tri = tris + 3 * t;
+        const float* o = &mesh.vertices[3 * static_cast<std::size_t>(reference[labels[tri[0]]])];
+        double p[3][3];
+        for (int i = 0; i < 3; ++i)
+            for (int k = 0; k < 3; ++k) p[i][k] = double(mesh.vertices[3 * static_cast<std::size_t>(tri[i]) + k]) - double(o[k]);
+        return (p[0][0] * (p[1][1] * p[2][2] - p[1][2] * p[2][1]) - p[0][1] * (p[1][0] * p[2][2] - p[1][2] * p[2][0]) +
+                p[0][2] * (p[1][0] * p[2][1] - p[1][1] * p[2][0])) / 6.0;
+    });
 }
 
 void restore_component_volumes(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<int32_t>& labels,
                                const std::vector<double>& target, const std::vector<float>& amount, double max_offset,
                                int normal_iterations, int threads) {
+    // Smoothed normals: offsets along raw vertex normals would print the triangulation's noise back in. The offsets
+    // are small against the features, so the directions computed once serve both Newton steps. Computed before
+    // anything else, since the caller takes them as the mesh's normals even when there is nothing to restore.
+    compute_area_weighted_normals(mesh, adjacency, threads);
+    smooth_normals(mesh, adjacency, normal_iterations, threads);
     const int32_t count = static_cast<int32_t>(target.size());
     if (count == 0 || mesh.num_triangles() == 0) return;
     std::vector<double> applied(static_cast<std::size_t>(count), 0.0);
-    // Smoothed normals: offsets along raw vertex normals would print the triangulation's noise back in. The offsets
-    // are small against the features, so the directions computed once serve both Newton steps.
-    compute_area_weighted_normals(mesh, adjacency, threads);
-    smooth_normals(mesh, adjacency, normal_iterations, threads);
     // Volume is close to linear in the offset for offsets small against the feature size: two Newton steps
     // bring it within a small fraction of a percent.
     for (int step = 0; step < 2; ++step) {
@@ -110,21 +112,19 @@ void restore_component_volumes(TriMesh& mesh, const MeshAdjacency& adjacency, co
         if (converged) break;
         // d volume / d s = sum_i amount_i * A_i, with A_i a third of the incident triangle areas.
         const int32_t* tris = mesh.triangles.data();
-        const std::vector<double> rate = sum_per_component(
-            static_cast<int64_t>(mesh.num_triangles()), count, threads, [&](int64_t t) { return labels[tris[3 * t]]; },
-            [&](int64_t t) {
-                const int32_t* tri = tris + 3 * t;
-                const float* a = &mesh.vertices[3 * static_cast<std::size_t>(tri[0])];
-                const float* b = &mesh.vertices[3 * static_cast<std::size_t>(tri[1])];
-                const float* c = &mesh.vertices[3 * static_cast<std::size_t>(tri[2])];
-                const double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
-                const double w[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
-                const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-                const double third_area = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / 6.0;
-                double sum = 0.0;
-                for (int i = 0; i < 3; ++i) sum += third_area * (amount.empty() ? 1.0 : double(amount[tri[i]]));
-                return sum;
-            });
+        const std::vector<double> rate = sum_per_component(mesh, labels, count, threads, [&](int64_t t) {
+            const int32_t* tri = tris + 3 * t;
+            const float* a = &mesh.vertices[3 * static_cast<std::size_t>(tri[0])];
+            const float* b = &mesh.vertices[3 * static_cast<std::size_t>(tri[1])];
+            const float* c = &mesh.vertices[3 * static_cast<std::size_t>(tri[2])];
+            const double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
+            const double w[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
+            const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+            const double third_area = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / 6.0;
+            double sum = 0.0;
+            for (int i = 0; i < 3; ++i) sum += third_area * (amount.empty() ? 1.0 : double(amount[tri[i]]));
+            return sum;
+        });
         std::vector<double> offset(static_cast<std::size_t>(count), 0.0);
         bool any = false;
         for (int32_t c = 0; c < count; ++c) {
