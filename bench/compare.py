@@ -241,6 +241,13 @@ def ratio(case, key):
     return ours[key] / theirs[key]
 
 
+def summarise_case(case):
+    """Medians per tool and the ratios ours / theirs, from the case's runs."""
+    case["median"] = {tool: summarise(case["runs"][tool]) for tool in TOOLS}
+    case["time_ratio"], case["memory_ratio"] = ratio(case, "seconds"), ratio(case, "peak_bytes")
+    case["net_memory_ratio"] = ratio(case, "net_bytes")
+
+
 def measure(args, cases, key, input_name, positions, particles, cube, threads, mode, repetitions, output):
     """Runs one case: both tools per repetition, which one goes first alternating; stores it in `cases`."""
     case = {"input": input_name, "particles": particles, "cube": cube, "threads": threads, "mode": mode,
@@ -255,9 +262,7 @@ def measure(args, cases, key, input_name, positions, particles, cube, threads, m
                      else "FAILED: " + result.get("error", "?"))
             print(f"[{time.strftime('%H:%M:%S')}] {input_name} c={cube} t={threads} {mode} rep {rep + 1}/{repetitions} "
                   f"{tool}: {state}", flush=True)
-    case["median"] = {tool: summarise(case["runs"][tool]) for tool in TOOLS}
-    case["time_ratio"], case["memory_ratio"] = ratio(case, "seconds"), ratio(case, "peak_bytes")
-    case["net_memory_ratio"] = ratio(case, "net_bytes")
+    summarise_case(case)
     cases[key] = case
     output.with_suffix(".json").write_text(json.dumps(output_json(args, cases), indent=1))  # partial results survive
     return case
@@ -554,9 +559,7 @@ def report_from(args, path):
             if not run.get("ok") and run.get("error") == "missing or non-finite normals" and "seconds" in run:
                 run.update(ok=True, warning="non-finite normals")
                 run.pop("error")
-        case["median"] = {tool: summarise(case["runs"][tool]) for tool in TOOLS}
-        case["time_ratio"], case["memory_ratio"] = ratio(case, "seconds"), ratio(case, "peak_bytes")
-        case["net_memory_ratio"] = ratio(case, "net_bytes")
+        summarise_case(case)
         cases[(case["input"], case["cube"], case["threads"], case["mode"])] = case
     labels = [label for label in SIZES if any(c["input"] == f"generated_{label}" for c in cases.values())]
     far = dict(data.get("far_flung") or {})
