@@ -6,8 +6,8 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "errors.h"
-#include "io_util.h"
+#include "base/errors.h"
+#include "io/io_util.h"
 
 namespace meniscus_fuzz {
 

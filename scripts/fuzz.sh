@@ -40,9 +40,9 @@ flags=(-std=c++17 -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined -f
 
 # The readers, built once with coverage instrumentation (rebuilt when a source or header is newer).
 objects=()
-for src in native/core/io*.cpp; do
-  obj="$out/obj/$(basename "${src%.cpp}").o"
-  if [ ! -f "$obj" ] || [ "$src" -nt "$obj" ] || [ -n "$(find native/core -name 'io*.h' -newer "$obj")" ]; then
+for src in $(find native/core/io -name '*.cpp' | sort) native/core/base/platform.cpp; do
+  obj="$out/obj/$(echo "${src#native/core/}" | tr / _ | sed 's/\.cpp$//').o"
+  if [ ! -f "$obj" ] || [ "$src" -nt "$obj" ] || [ -n "$(find native/core/io native/core/base -name '*.h' -newer "$obj")" ]; then
     echo "fuzz: compiling $src"
     "$CXX" "${flags[@]}" -fsanitize=fuzzer-no-link -c "$src" -o "$obj"
   fi

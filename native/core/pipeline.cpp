@@ -4,13 +4,13 @@
 #include <cmath>
 #include <string>
 
-#include "errors.h"
-#include "mesh_adjacency.h"
-#include "parallel.h"
-#include "postprocess.h"
-#include "reconstruction.h"
-#include "volume.h"
-#include "weights.h"
+#include "base/errors.h"
+#include "mesh/adjacency.h"
+#include "base/parallel.h"
+#include "post/postprocess.h"
+#include "surface/reconstruction.h"
+#include "post/volume.h"
+#include "post/weights.h"
 
 namespace meniscus {
 
@@ -146,8 +146,11 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
     if (!attributes.empty()) {
         StageTimer timer(&stats, "attributes");
         for (const auto& a : attributes) {
-            Attribute out{a.name, a.components, {}};
-            interpolate_at_points(r, a.values, a.components, mesh.vertices, out.values, threads);
+            Attribute out{a.name, a.components, {}, a.integral};
+            if (a.integral)
+                nearest_particle_at_points(r, a.values, a.components, mesh.vertices, out.values, threads);
+            else
+                interpolate_at_points(r, a.values, a.components, mesh.vertices, out.values, threads);
             mesh.attributes.push_back(std::move(out));
         }
     }

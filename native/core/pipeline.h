@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
-#include "mesh.h"
+#include "mesh/mesh.h"
 #include "params.h"
-#include "particles.h"
-#include "stats.h"
+#include "sph/particles.h"
+#include "base/stats.h"
 
 namespace meniscus {
 
@@ -18,6 +18,7 @@ struct AttributeInput {
     std::string name;
     const float* values = nullptr;
     int components = 1;
+    bool integral = false;  // whole numbers (ids, labels): the nearest particle's value, not an average
 };
 
 struct PipelineOptions {

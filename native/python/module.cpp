@@ -6,14 +6,17 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "errors.h"
-#include "io.h"
+#include "cli.h"
+#include "base/errors.h"
+#include "io/io.h"
 #include "pipeline.h"
-#include "postprocess.h"
+#include "post/postprocess.h"
 
 namespace py = pybind11;
 using namespace meniscus;
@@ -28,13 +31,63 @@ py::array_t<T> to_numpy(std::vector<T>&& values, std::vector<py::ssize_t> shape)
     return py::array_t<T>(shape, owner->data(), capsule);
 }
 
+// Checks a float array's dtype, layout and shape; names the argument and says what it got.
+void require_float_array(const py::array& a, const std::string& name, bool allow_double, int columns) {
+    const bool is_f32 = a.dtype().is(py::dtype::of<float>());
+    const bool is_f64 = a.dtype().is(py::dtype::of<double>());
+    if (!is_f32 && !(allow_double && is_f64))
+        throw InputError(name + " must be " + (allow_double ? "float32 or float64" : "float32") + ", got dtype " +
+                         py::str(a.dtype()).cast<std::string>());
+    if (!(a.flags() & py::array::c_style)) throw InputError(name + " must be C-contiguous (use numpy.ascontiguousarray)");
+    if (columns > 0 && (a.ndim() != 2 || a.shape(1) != columns))
+        throw InputError(name + " must have shape (N, " + std::to_string(columns) + "), got " + py::str(py::tuple(py::cast(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim())))).cast<std::string>());
+}
+
+// Attributes as numpy arrays: float32, or int32 for whole-number attributes (ids, labels), which the core carries
+// in float (exact up to 2^24).
 py::dict attributes_to_dict(std::vector<Attribute>&& attributes) {
     py::dict out;
     for (auto& a : attributes) {
         const py::ssize_t count = static_cast<py::ssize_t>(a.count());
         std::vector<py::ssize_t> shape = a.components == 1 ? std::vector<py::ssize_t>{count} : std::vector<py::ssize_t>{count, a.components};
-        out[py::str(a.name)] = to_numpy(std::move(a.values), shape);
+        if (a.integral) {
+            std::vector<int32_t> whole(a.values.size());
+            for (std::size_t i = 0; i < whole.size(); ++i)
+                whole[i] = std::isfinite(a.values[i]) ? static_cast<int32_t>(std::clamp(a.values[i], -2147483648.0f, 2147483520.0f)) : 0;
+            out[py::str(a.name)] = to_numpy(std::move(whole), shape);
+        } else {
+            out[py::str(a.name)] = to_numpy(std::move(a.values), shape);
+        }
     }
+    return out;
+}
+
+// A per-element attribute given from Python: float32 arrays are read in place; integer and bool arrays (ids, labels,
+// flags) are converted to float and marked whole-number.
+struct AttributeArray {
+    const float* values = nullptr;
+    int components = 1;
+    bool integral = false;
+    std::vector<float> converted;
+};
+
+AttributeArray attribute_array(const py::handle& object, const std::string& name, std::size_t rows, const char* per_what) {
+    if (!py::isinstance<py::array>(object)) throw InputError("attribute '" + name + "' must be a numpy array");
+    const py::array a = py::reinterpret_borrow<py::array>(object);
+    if (a.ndim() < 1 || a.ndim() > 2 || static_cast<std::size_t>(a.shape(0)) != rows)
+        throw InputError("attribute '" + name + "' must have shape (N,) or (N, k) with N = " + std::to_string(rows) + " " + per_what);
+    AttributeArray out;
+    out.components = a.ndim() == 2 ? static_cast<int>(a.shape(1)) : 1;
+    const char kind = a.dtype().kind();
+    if (kind == 'i' || kind == 'u' || kind == 'b') {
+        const py::array_t<double, py::array::c_style | py::array::forcecast> as_double(a);
+        out.converted.assign(as_double.data(), as_double.data() + as_double.size());
+        out.values = out.converted.data();
+        out.integral = true;
+        return out;
+    }
+    require_float_array(a, "attribute '" + name + "'", false, 0);
+    out.values = static_cast<const float*>(a.data());
     return out;
 }
 
@@ -60,18 +113,6 @@ py::dict stats_to_dict(const PipelineStats& stats) {
     return out;
 }
 
-// Checks a float array's dtype, layout and shape; names the argument and says what it got.
-void require_float_array(const py::array& a, const std::string& name, bool allow_double, int columns) {
-    const bool is_f32 = a.dtype().is(py::dtype::of<float>());
-    const bool is_f64 = a.dtype().is(py::dtype::of<double>());
-    if (!is_f32 && !(allow_double && is_f64))
-        throw InputError(name + " must be " + (allow_double ? "float32 or float64" : "float32") + ", got dtype " +
-                         py::str(a.dtype()).cast<std::string>());
-    if (!(a.flags() & py::array::c_style)) throw InputError(name + " must be C-contiguous (use numpy.ascontiguousarray)");
-    if (columns > 0 && (a.ndim() != 2 || a.shape(1) != columns))
-        throw InputError(name + " must have shape (N, " + std::to_string(columns) + "), got " + py::str(py::tuple(py::cast(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim())))).cast<std::string>());
-}
-
 PositionsView positions_view(const py::array& positions) {
     require_float_array(positions, "positions", true, 3);
     const std::size_t n = static_cast<std::size_t>(positions.shape(0));
@@ -86,14 +127,12 @@ py::dict reconstruct(const py::array& positions, double particle_radius, double 
                      std::size_t memory_budget, bool skip_invalid, bool keep_raw_mesh) {
     const PositionsView view = positions_view(positions);
     std::vector<AttributeInput> inputs;
+    std::vector<AttributeArray> arrays;
+    arrays.reserve(attributes.size());  // inputs point into the arrays' converted storage: no reallocation
     for (const auto& item : attributes) {
         const std::string name = py::str(item.first);
-        const py::array values = py::reinterpret_borrow<py::array>(item.second);
-        if (!py::isinstance<py::array>(item.second)) throw InputError("attribute '" + name + "' must be a numpy array");
-        require_float_array(values, "attribute '" + name + "'", false, 0);
-        if (values.ndim() < 1 || values.ndim() > 2 || static_cast<std::size_t>(values.shape(0)) != view.count)
-            throw InputError("attribute '" + name + "' must have shape (N,) or (N, k) with N = " + std::to_string(view.count) + " particles");
-        inputs.push_back({name, static_cast<const float*>(values.data()), values.ndim() == 2 ? static_cast<int>(values.shape(1)) : 1});
+        arrays.push_back(attribute_array(item.second, name, view.count, "particles"));
+        inputs.push_back({name, arrays.back().values, arrays.back().components, arrays.back().integral});
     }
     PipelineOptions options;
     options.reconstruction = {particle_radius, smoothing_length, cube_size, iso_threshold};
@@ -160,11 +199,9 @@ TriMesh mesh_from_arrays(const py::array& vertices, const py::array& triangles, 
     }
     for (const auto& item : attributes) {
         const std::string name = py::str(item.first);
-        const py::array a = py::reinterpret_borrow<py::array>(item.second);
-        require_float_array(a, "attribute '" + name + "'", false, 0);
-        if (a.ndim() < 1 || a.ndim() > 2 || a.shape(0) != vertices.shape(0)) throw InputError("attribute '" + name + "' must have one row per vertex");
-        Attribute out{name, a.ndim() == 2 ? static_cast<int>(a.shape(1)) : 1, {}};
-        out.values.assign(static_cast<const float*>(a.data()), static_cast<const float*>(a.data()) + a.size());
+        const AttributeArray a = attribute_array(item.second, name, mesh.num_vertices(), "vertices");
+        Attribute out{name, a.components, {}, a.integral};
+        out.values.assign(a.values, a.values + mesh.num_vertices() * static_cast<std::size_t>(a.components));
         mesh.attributes.push_back(std::move(out));
     }
     return mesh;
@@ -185,6 +222,29 @@ py::dict check_to_dict(const MeshCheck& c) {
     out["unreferenced_vertices"] = c.unreferenced_vertices;
     out["summary"] = c.summary();
     return out;
+}
+
+
+// The command line inside Python (the wheel's `meniscus` console script). Native code cannot see Ctrl-C, so the
+// run asks Python between frames, and a pending KeyboardInterrupt stops it there.
+int run_cli_in_python(const std::vector<std::string>& arguments) {
+    CliHooks hooks;
+    hooks.interrupted = [] {
+        py::gil_scoped_acquire acquire;
+        if (PyErr_CheckSignals() == 0) return false;
+        PyErr_Clear();  // raised again below, once the run has returned
+        return true;
+    };
+    int status;
+    {
+        py::gil_scoped_release release;
+        status = run_cli(arguments, hooks);
+    }
+    if (status == kExitInterrupted) {
+        PyErr_SetNone(PyExc_KeyboardInterrupt);
+        throw py::error_already_set();
+    }
+    return status;
 }
 
 }  // namespace
@@ -214,6 +274,8 @@ PYBIND11_MODULE(_core, m) {
           py::arg("normal_smoothing_iterations") = 0, py::arg("sph_normals") = false, py::arg("threads") = 0, py::arg("memory_budget") = 0,
           py::arg("skip_invalid") = false, py::arg("keep_raw_mesh") = false,
           "Runs the pipeline on (N, 3) float32/float64 positions; returns a dict of numpy arrays and stats.");
+    m.def("run_cli", &run_cli_in_python, py::arg("arguments"),
+          "Runs the meniscus command line (arguments[0] is the program name); returns the exit status.");
     m.def("read_particles", &read_particle_file, py::arg("path"), "Reads a particle file: dict with 'positions' (N, 3) float32 and 'attributes'.");
     m.def("read_mesh", [](const std::string& path) {
         TriMesh mesh;

@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "mesh.h"
+#include "mesh/mesh.h"
 
 namespace meniscus {
 namespace test {

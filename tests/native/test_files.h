@@ -1,7 +1,11 @@
 // Temporary directories and byte-level file helpers shared by the reader tests.
 #pragma once
-#include <unistd.h>
 #include <zlib.h>
+#ifdef _WIN32
+#include <process.h>
+#else
+#include <unistd.h>
+#endif
 
 #include <catch2/catch.hpp>
 #include <cstdlib>
@@ -20,9 +24,19 @@ using Bytes = std::vector<unsigned char>;
 // The damage tests rewrite thousands of files; on some disks (ext4 with online discard) each truncation costs
 // milliseconds, so a RAM-backed /dev/shm is preferred unless TMPDIR asks for a specific place.
 inline fs::path temp_root() {
+#ifndef _WIN32
     std::error_code ec;
     if (!std::getenv("TMPDIR") && fs::is_directory("/dev/shm", ec) && ::access("/dev/shm", W_OK) == 0) return "/dev/shm";
+#endif
     return fs::temp_directory_path();
+}
+
+inline int process_id() {
+#ifdef _WIN32
+    return _getpid();
+#else
+    return static_cast<int>(::getpid());
+#endif
 }
 
 // A fresh directory under the temp root, readable by other users (the unreadable-file tests drop to 'nobody'),
@@ -31,15 +45,20 @@ struct TempDir {
     fs::path path;
     explicit TempDir(const std::string& tag) {
         static int counter = 0;
-        path = temp_root() / ("meniscus_test_" + std::to_string(::getpid()) + "_" + tag + "_" + std::to_string(counter++));
-        fs::remove_all(path);
+        path = temp_root() / ("meniscus_test_" + std::to_string(process_id()) + "_" + tag + "_" + std::to_string(counter++));
+        remove(path);
         fs::create_directories(path);
         fs::permissions(path, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec | fs::perms::others_read |
                                   fs::perms::others_exec);
     }
-    ~TempDir() {
+    ~TempDir() { remove(path); }
+    // Windows refuses to delete read-only files (copies of the read-only shared frames are): make them writable.
+    static void remove(const fs::path& folder) {
         std::error_code ec;
-        fs::remove_all(path, ec);
+        if (!fs::exists(folder, ec)) return;
+        for (const auto& entry : fs::recursive_directory_iterator(folder, ec))
+            fs::permissions(entry.path(), fs::perms::owner_write, fs::perm_options::add, ec);
+        fs::remove_all(folder, ec);
     }
     std::string file(const std::string& name) const { return (path / name).string(); }
 };

@@ -11,11 +11,11 @@
 #include <random>
 #include <set>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
-#include "errors.h"
-#include "io.h"
+#include "base/errors.h"
+#include "base/platform.h"
+#include "io/io.h"
 #include "test_files.h"
 
 using namespace meniscus;
@@ -261,6 +261,31 @@ TEST_CASE("every shared particle file reads with its count and attributes", "[io
         ParticleData p = read_particles(kShared + "/" + spec.path);
         check_particles(p, spec);
     }
+}
+
+TEST_CASE("file names with non-ASCII characters read and write on every platform", "[io]") {
+    // Windows opens files by UTF-16 names: a UTF-8 path must never reach a narrow-character API there.
+    TempDir dir("unicode");
+    const std::string folder = path_to_utf8(dir.path) + "/\xc3\xa9t\xc3\xa9 \xe7\xb2\x92\xe5\xad\x90";  // "été 粒子"
+    fs::create_directory(path_from_utf8(folder));
+    const std::string source = kShared + "/splashsurf/bunny_frame_14_7705_particles.vtk";
+    const std::string particles = folder + "/fluid_\xc3\xa9t\xc3\xa9_0001.vtk";
+    fs::copy_file(path_from_utf8(source), path_from_utf8(particles));
+    const ParticleData original = read_particles(source), copy = read_particles(particles);
+    REQUIRE(copy.positions == original.positions);
+
+    TriMesh mesh;
+    mesh.vertices = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+    mesh.triangles = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
+    for (const char* extension : {".ply", ".obj", ".vtk"}) {
+        const std::string path = folder + "/surface_\xe7\xb2\x92\xe5\xad\x90" + extension;
+        write_mesh(mesh, path);
+        REQUIRE(fs::is_regular_file(path_from_utf8(path)));
+        if (std::string(extension) != ".vtk") REQUIRE(read_mesh(path).vertices == mesh.vertices);
+    }
+    // Errors name the file as the user spelled it.
+    const std::string missing = folder + "/missing_\xc3\xa9.vtk";
+    REQUIRE_THROWS_WITH(read_particles(missing), Catch::StartsWith(missing));
 }
 
 TEST_CASE("the sequence frames all read, with stable ids", "[io]") {

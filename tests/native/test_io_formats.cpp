@@ -10,11 +10,10 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
-#include "errors.h"
-#include "io.h"
+#include "base/errors.h"
+#include "io/io.h"
 #include "test_files.h"
 
 using namespace meniscus;

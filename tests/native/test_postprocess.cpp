@@ -5,10 +5,10 @@
 #include <cmath>
 #include <vector>
 
-#include "errors.h"
-#include "mesh_adjacency.h"
+#include "base/errors.h"
+#include "mesh/adjacency.h"
 #include "mesh_builders.h"
-#include "postprocess.h"
+#include "post/postprocess.h"
 
 using namespace meniscus;
 using namespace meniscus::test;

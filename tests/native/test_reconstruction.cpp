@@ -8,15 +8,16 @@
 #include <string>
 #include <vector>
 
-#include "errors.h"
-#include "io.h"
-#include "kernel.h"
-#include "marching_cubes.h"
-#include "mesh_adjacency.h"
-#include "neighborhood.h"
+#include "base/numbers.h"
+#include "base/errors.h"
+#include "io/io.h"
+#include "sph/kernel.h"
+#include "surface/marching_cubes.h"
+#include "mesh/adjacency.h"
+#include "sph/neighborhood.h"
 #include "pipeline.h"
-#include "postprocess.h"
-#include "reconstruction.h"
+#include "post/postprocess.h"
+#include "surface/reconstruction.h"
 
 using namespace meniscus;
 
@@ -64,7 +65,7 @@ TEST_CASE("cubic spline kernel integrates to one and vanishes at the support", "
         double integral = 0.0;
         for (int i = 0; i < steps; ++i) {
             const double d = (i + 0.5) * support / steps;
-            integral += 4.0 * M_PI * d * d * kernel.value(static_cast<float>(d)) * support / steps;
+            integral += 4.0 * kPi * d * d * kernel.value(static_cast<float>(d)) * support / steps;
         }
         CHECK(integral == Approx(1.0).epsilon(1e-4));
         CHECK(kernel.value(static_cast<float>(support)) == 0.0f);
@@ -122,7 +123,7 @@ TEST_CASE("marching cubes reproduces a sphere's volume within 1 %", "[mc]") {
     const MeshCheck check = check_mesh(mesh);
     INFO(check.summary());
     REQUIRE(check.ok());
-    const double exact = 4.0 / 3.0 * M_PI * radius * radius * radius;
+    const double exact = 4.0 / 3.0 * kPi * radius * radius * radius;
     CHECK(signed_volume(mesh) == Approx(exact).epsilon(0.01));
     CHECK(signed_volume(mesh) > 0.0);  // outward orientation
 }

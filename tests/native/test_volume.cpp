@@ -3,10 +3,11 @@
 
 #include <cmath>
 
-#include "mesh_adjacency.h"
+#include "base/numbers.h"
+#include "mesh/adjacency.h"
 #include "mesh_builders.h"
-#include "postprocess.h"
-#include "volume.h"
+#include "post/postprocess.h"
+#include "post/volume.h"
 
 using namespace meniscus;
 using namespace meniscus::test;
@@ -18,8 +19,8 @@ TEST_CASE("components are labelled and their volumes measured", "[volume]") {
     const auto labels = component_labels(mesh, &count);
     REQUIRE(count == 2);
     const auto volumes = component_volumes(mesh, labels, count);
-    CHECK(volumes[0] == Approx(4.0 / 3.0 * M_PI).epsilon(0.02));
-    CHECK(volumes[1] == Approx(4.0 / 3.0 * M_PI / 8.0).epsilon(0.02));
+    CHECK(volumes[0] == Approx(4.0 / 3.0 * kPi).epsilon(0.02));
+    CHECK(volumes[1] == Approx(4.0 / 3.0 * kPi / 8.0).epsilon(0.02));
 }
 
 TEST_CASE("restoration gives each smoothed component its volume back, weighted vertices only", "[volume]") {

@@ -1,0 +1,33 @@
+// Particle readers and mesh writers. Every error is a FormatError whose message starts with the file path and
+// says what is wrong (truncated at byte N, unknown type, a count the file size cannot hold, ...). Readers never
+// allocate more than the file's size can justify.
+#pragma once
+#include <string>
+
+#include "mesh/mesh.h"
+#include "sph/particles.h"
+
+namespace meniscus {
+
+// Reads a particle file; the format is chosen by content (magic bytes / header), falling back to the extension.
+// Supported (details and variants in docs/formats.md): legacy VTK (ASCII and binary big-endian; UNSTRUCTURED_GRID and
+// POLYDATA; POINT_DATA SCALARS / VECTORS / FIELD arrays), VTK XML .vtu / .vtp (ascii, base64, appended raw or base64,
+// zlib, either byte order), BGEO v5 (Partio layout), Houdini JSON geometry (binary .bgeo, ASCII .geo), PLY (ASCII
+// and binary vertex properties), raw float32 or text .xyz, NumPy .npy / .npz, CSV with an x, y, z header; any of
+// them gzip-compressed. Not supported, with a message naming the variant: Houdini .sc (Blosc), classic ASCII
+// PGEOMETRY, parallel .pvtu, non-zlib VTK compressors, pickled .npy.
+// Attributes become float32 arrays (ints converted), named as in the file. Legacy VTK "long" is read as 8 bytes (as
+// VTK writes it on 64-bit Unix). Decompression (gzip, VTK zlib blocks, .npz members) is capped at 64x the compressed
+// size + 64 MiB (see io_util.h).
+ParticleData read_particles(const std::string& path);
+
+// Writes a mesh; the format follows the extension: .ply (binary little-endian, with normals and every vertex
+// attribute), .obj (with normals), .vtk (legacy, binary, POLYDATA with normals and attributes as point data).
+// PLY attribute properties: NAME for 1 component, NAME_x NAME_y NAME_z for 3, NAME_0 .. NAME_{k-1} otherwise (details
+// in io_mesh.cpp). An invalid mesh or an unknown extension is an InputError; a failed write a FormatError.
+void write_mesh(const TriMesh& mesh, const std::string& path);
+
+// Reads a triangle mesh written by write_mesh (PLY binary/ASCII or OBJ), with normals and attributes where present.
+TriMesh read_mesh(const std::string& path);
+
+}  // namespace meniscus

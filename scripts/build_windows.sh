@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Cross-compiles the core, the command line and the Catch2 suite for 64-bit Windows with mingw-w64 into
+# build-windows/, then runs them under Wine:
+#   - the whole Catch2 suite (meniscus_tests.exe);
+#   - a CLI reconstruction of a shared frame, compared with the Linux build's mesh (same triangles, vertices within
+#     float tolerance): tests/windows/compare_meshes.py;
+#   - a particle file whose path has non-ASCII characters (Windows opens files by UTF-16 names).
+# Installs what it needs (mingw-w64, Wine); needs the Linux build (scripts/setup.sh) for the comparison.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source scripts/lib.sh
+require_packages g++-mingw-w64-x86-64-posix libz-mingw-w64-dev wine64 catch2 libcli11-dev nlohmann-json3-dev
+wine=/usr/lib/wine/wine64  # Debian's wine64 package does not put its loader on PATH
+build=build-windows
+
+# Header-only libraries are architecture-independent: give the cross build Debian's copies, and nothing else from
+# /usr/include (glibc headers must not leak into a Windows build).
+headers="$build/header-only"
+mkdir -p "$headers"
+for dir in CLI nlohmann catch2; do ln -sfn "/usr/include/$dir" "$headers/$dir"; done
+
+/usr/bin/cmake -S . -B "$build" -DCMAKE_TOOLCHAIN_FILE="$PWD/cmake/toolchains/mingw-w64-x86_64.cmake" \
+  -DCMAKE_BUILD_TYPE=Release -DMENISCUS_BUILD_PYTHON=OFF -DMENISCUS_FETCH_DEPENDENCIES=OFF \
+  -DMENISCUS_DEPENDENCY_INCLUDE_DIRS="$PWD/$headers" -DZLIB_LIBRARY=/usr/x86_64-w64-mingw32/lib/libz.a \
+  -DZLIB_INCLUDE_DIR=/usr/x86_64-w64-mingw32/include \
+  -DOpenMP_gomp_LIBRARY="$(ls /usr/lib/gcc/x86_64-w64-mingw32/*-posix/libgomp.a | head -1)" > "$build-configure.log" 2>&1 || { cat "$build-configure.log"; exit 1; }
+/usr/bin/cmake --build "$build" -j"$(nproc)"
+
+export WINEPREFIX="$PWD/$build/wineprefix" WINEDEBUG=-all
+[ -d "$WINEPREFIX" ] || "$wine" wineboot --init > /dev/null 2>&1 || true
+
+echo "== Catch2 suite under Wine"
+"$wine" "$build/bin/meniscus_tests.exe" "$@"
+
+echo "== CLI under Wine against the Linux build"
+python3 tests/portability/check_cli.py --wine "$wine" --windows-cli "$build/bin/meniscus.exe" --linux-cli build/bin/meniscus
