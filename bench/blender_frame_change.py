@@ -4,7 +4,7 @@ and Blender's shares.
     bash bench/blender_frame_change.sh        # both Blender versions, writes bench/results/blender_frame_change.md
     blender -b --factory-startup --python-exit-code 1 --python bench/blender_frame_change.py -- \
         --json build/bench/blender_frame_change_3.4.json
-    build/venv-bpy/bin/python bench/blender_frame_change.py -- --json build/bench/blender_frame_change_4.5.json
+    build/venv/bpy-4.5/bin/python bench/blender_frame_change.py -- --json build/bench/blender_frame_change_4.5.json
     /usr/bin/python3 bench/blender_frame_change.py --report build/bench/blender_frame_change_3.4.json \
         build/bench/blender_frame_change_4.5.json
 

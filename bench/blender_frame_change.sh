@@ -5,14 +5,13 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 
-# The bpy 4.5 venv, created and filled once exactly as scripts/test.sh does.
-[ -x build/venv-bpy/bin/python ] || /usr/bin/python3 -m venv --system-site-packages build/venv-bpy
-build/venv-bpy/bin/python -c "import bpy" 2>/dev/null || build/venv-bpy/bin/pip install -q 'bpy==4.5.*'
+source scripts/lib.sh
+bpy45="$(bpy_venv 4.5)"  # the venv scripts/test.sh uses
 
 mkdir -p build/bench
 blender -b --factory-startup --python-exit-code 1 --python bench/blender_frame_change.py -- \
     --addon-path build/addon --json build/bench/blender_frame_change_3.4.json
-build/venv-bpy/bin/python bench/blender_frame_change.py -- \
+"$bpy45" bench/blender_frame_change.py -- \
     --addon-path build/addon --json build/bench/blender_frame_change_4.5.json
 /usr/bin/python3 bench/blender_frame_change.py --report \
     build/bench/blender_frame_change_3.4.json build/bench/blender_frame_change_4.5.json

@@ -1,7 +1,7 @@
 """Blender-side cost per frame of a ~1 M-triangle fluid surface: arrays -> mesh -> normals -> attributes -> depsgraph.
 
     blender -b --factory-startup --python-exit-code 1 --python bench/blender_mesh_update.py -- --addon-path build/addon
-    build/venv-bpy/bin/python bench/blender_mesh_update.py -- --addon-path build/addon
+    build/venv/bpy-4.5/bin/python bench/blender_mesh_update.py -- --addon-path build/addon
 
 The surface is meniscus.reconstruct of the splashsurf test set pentagonal_hexecontahedron_32286_particles.bgeo
 (particle radius 0.025, cube size chosen to give ~1 M triangles; cached in build/bench/ so both Blender versions write

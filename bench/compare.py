@@ -72,7 +72,7 @@ def child(args):
     out = {"ok": False}
     try:
         if args.tool == "meniscus":
-            sys.path.insert(0, str(ROOT / "build" / "addon"))
+            sys.path.insert(0, str(ROOT / "build" / "python"))
             import meniscus
             full = dict(decimate_barnacles=True, smoothing_iterations=25, normal_smoothing_iterations=10)
 
@@ -167,7 +167,7 @@ def positions_cache(name, source):
     CACHE.mkdir(parents=True, exist_ok=True)
     target = CACHE / f"{name}.npy"
     if not target.exists() or target.stat().st_mtime < source.stat().st_mtime:
-        sys.path.insert(0, str(ROOT / "build" / "addon"))
+        sys.path.insert(0, str(ROOT / "build" / "python"))
         import meniscus
         positions = np.ascontiguousarray(meniscus.read_particles(source).positions, dtype=np.float32)
         np.save(target, positions)

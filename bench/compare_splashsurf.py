@@ -14,7 +14,7 @@ import time
 import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "build" / "addon"))
+sys.path.insert(0, str(ROOT / "build" / "python"))
 import meniscus  # noqa: E402
 import pysplashsurf  # noqa: E402
 

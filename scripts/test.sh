@@ -1,25 +1,45 @@
 #!/usr/bin/env bash
-# Runs every test: Catch2 (C++ core), pytest (Python API, CLI), headless Blender. Installs and builds first.
+# Runs every test; installs and builds first; exits non-zero on any failure (this is what .ci/run calls):
+#   C++ (Catch2) and Python (pytest) suites; the packages users install (wheels for CPython 3.10/3.11/3.13 and the
+#   Blender zips, built by scripts/package.sh) installed into clean environments; the headless Blender suite against
+#   the installed add-on on Debian's Blender 3.4 (legacy zip) and on bpy 4.2, 4.5, 5.0 and 5.2 (extension zip); the
+#   Windows cross-build under Wine and the clang/libc++/libomp build; the C++ suite under ASan/UBSan; a small run of
+#   the speed benchmark against pysplashsurf.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source scripts/lib.sh
+started=$SECONDS
+section() { echo "== $* ($((SECONDS - started)) s)"; }
 bash scripts/setup.sh
 
-echo "== C++ tests (ctest)"
+section "C++ tests (ctest)"
 /usr/bin/ctest --test-dir build --output-on-failure -j2
 
-echo "== Python tests (pytest)"
+section "Packages: wheels and Blender zips (scripts/package.sh)"
+bash scripts/package.sh > build/package.log 2>&1 || { tail -40 build/package.log; exit 1; }
+version="$(sed -n 's/^project(meniscus VERSION \([0-9.]*\).*/\1/p' CMakeLists.txt)"
+extension="dist/meniscus-$version-linux_x64.zip"
+legacy="dist/meniscus-$version-legacy-linux_x64.zip"
+
+section "Python tests (pytest: API, CLI, quality, packages)"
 /usr/bin/python3 -m pytest -q tests/python
 
-echo "== Blender tests (headless, Debian's Blender)"
-bash tests/blender/run_all.sh build/addon
+section "Blender 3.4 (Debian) with the legacy add-on zip"
+bash tests/blender/run.sh /usr/bin/blender "$legacy" legacy
+for blender_version in 4.2 4.5 5.0 5.2; do
+  section "Blender $blender_version (bpy from PyPI) with the extension zip"
+  bash tests/blender/run.sh "$(bpy_venv "$blender_version")" "$extension" extension
+done
 
-echo "== Blender tests (bpy 4.5 LTS from PyPI)"
-# A venv on top of Debian's Python (numpy, pytest) with the bpy wheel; created and filled once.
-[ -x build/venv-bpy/bin/python ] || /usr/bin/python3 -m venv --system-site-packages build/venv-bpy
-build/venv-bpy/bin/python -c "import bpy" 2>/dev/null || build/venv-bpy/bin/pip install -q 'bpy==4.5.*'
-bash tests/blender/run_bpy.sh build/addon
-echo "== C++ tests under AddressSanitizer + UBSan"
+section "Windows: mingw-w64 cross-build, tests under Wine"
+bash scripts/build_windows.sh > build/windows.log 2>&1 || { tail -60 build/windows.log; exit 1; }
+grep -E "^All tests passed|^test cases|largest vertex difference|matches" build/windows.log
+section "clang++ with libc++ and libomp (macOS's toolchain)"
+bash scripts/build_clang.sh > build/clang.log 2>&1 || { tail -60 build/clang.log; exit 1; }
+grep -E "^All tests passed|^test cases|largest vertex difference|matches" build/clang.log
+
+section "C++ tests under AddressSanitizer + UBSan"
 bash scripts/test_sanitizers.sh
-echo "== Benchmark against pysplashsurf, small version (both tools run, meshes valid; timings not judged in CI)"
+section "Benchmark against pysplashsurf, small version (both tools run, meshes valid; timings not judged in CI)"
 bash bench/compare.sh --quick
-echo "all tests passed"
+section "all tests passed"

@@ -1,30 +1,32 @@
-"""Meniscus: smooth, render-ready fluid surfaces from particle simulations.
+"""Meniscus for Blender: fluid surfaces rebuilt from particle caches on every frame (View3D > Sidebar > Meniscus).
 
-The package is both the Python API (``import meniscus``; no bpy needed) and the Blender add-on (``register`` /
-``unregister``, imported lazily so that the API works outside Blender).
+This package is the add-on only; the bpy-free library it drives (`api`, `cache`, `sequence` and the compiled core)
+comes from one of two places:
+- the extension zip (Blender 4.2+): Blender installs the bundled wheel that matches its Python as the top-level
+  package `meniscus`, and this add-on runs as `bl_ext.<repository>.meniscus`;
+- the legacy add-on zip (Blender 3.4-4.1): the library's modules sit next to this file (one compiled core per
+  Python version), since those versions cannot install wheels.
 """
 bl_info = {
     "name": "Meniscus",
     "author": "Meniscus developers",
-    "version": (0, 1, 0),
+    "version": (0, 2, 0),
     "blender": (3, 4, 0),
     "location": "View3D > Sidebar > Meniscus",
     "description": "Smooth fluid surfaces from particle caches (SPH, FLIP), rebuilt on every frame",
+    "doc_url": "",
     "category": "Import-Export",
 }
 
-from .api import (  # noqa: E402,F401
-    FormatError,
-    Mesh,
-    Particles,
-    __version__,
-    assess_quality,
-    check_mesh,
-    read_mesh,
-    read_particles,
-    reconstruct,
-    write_mesh,
-)
+import os  # noqa: E402
+
+if os.path.exists(os.path.join(os.path.dirname(__file__), "api.py")):  # legacy zip: the library is bundled here
+    from . import api, cache, sequence  # noqa: F401
+    # Scripts in every Blender can then write `import meniscus; meniscus.reconstruct(...)`: here `meniscus` is this
+    # add-on, in 4.2+ the library itself.
+    from .api import *  # noqa: F401,F403
+else:  # extension: the wheel Blender installed
+    from meniscus import api, cache, sequence  # noqa: F401
 
 
 def register():

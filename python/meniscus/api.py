@@ -17,6 +17,9 @@ import numpy as np
 
 from . import _core
 
+__all__ = ["FormatError", "Mesh", "Particles", "__version__", "assess_quality", "check_mesh", "read_mesh",
+           "read_particles", "reconstruct", "write_mesh"]
+
 FormatError = _core.FormatError
 __version__ = _core.__version__
 
@@ -24,7 +27,8 @@ __version__ = _core.__version__
 @dataclass
 class Particles:
     positions: np.ndarray                      # (N, 3) float32
-    attributes: Dict[str, np.ndarray] = field(default_factory=dict)  # (N,) or (N, k) float32
+    # (N,) or (N, k): float32, or int32 for whole-number fields of the file (ids, labels)
+    attributes: Dict[str, np.ndarray] = field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(self.positions)
@@ -42,6 +46,15 @@ class Mesh:
 
     def write(self, path: str) -> None:
         write_mesh(self, path)
+
+
+def _attribute_array(values) -> np.ndarray:
+    """Integer and bool arrays (ids, labels, flags) go to the core as they are, which carries them as whole numbers
+    (from the nearest particle, never averaged); anything else as float32 (copied only when it is not already)."""
+    values = np.asarray(values)
+    if values.dtype.kind in "iub":
+        return np.ascontiguousarray(values)
+    return np.ascontiguousarray(values, dtype=np.float32)
 
 
 def _mesh(result: dict) -> Mesh:
@@ -71,7 +84,7 @@ def reconstruct(positions, particle_radius: float, smoothing_length: float = 2.0
     """
     converted = {}
     for name, values in (attributes or {}).items():
-        converted[str(name)] = np.ascontiguousarray(values, dtype=np.float32)  # copies only when not float32 already
+        converted[str(name)] = _attribute_array(values)
     result = _core.reconstruct(
         positions, float(particle_radius), float(smoothing_length), float(cube_size), float(iso_threshold), converted,
         bool(mesh_cleanup), float(mesh_cleanup_snap_distance), bool(decimate_barnacles), int(smoothing_iterations),
@@ -88,7 +101,7 @@ def reconstruct(positions, particle_radius: float, smoothing_length: float = 2.0
 
 def write_mesh(mesh: Mesh, path) -> None:
     """Writes .ply (binary, normals and attributes), .obj or .vtk, chosen by the extension."""
-    attributes = {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in mesh.attributes.items()}
+    attributes = {k: _attribute_array(v) for k, v in mesh.attributes.items()}
     normals = None if mesh.normals is None else np.ascontiguousarray(mesh.normals, dtype=np.float32)
     _core.write_mesh(str(path), np.ascontiguousarray(mesh.vertices, dtype=np.float32),
                      np.ascontiguousarray(mesh.triangles, dtype=np.int32), normals, attributes)

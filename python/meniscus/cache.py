@@ -56,7 +56,9 @@ def save_mesh(mesh: api.Mesh, path: str) -> None:
             if mesh.normals is not None:
                 arrays["normals"] = np.ascontiguousarray(mesh.normals, dtype=np.float32)
             for name, values in mesh.attributes.items():
-                arrays[_NPZ_ATTRIBUTE_PREFIX + name] = np.ascontiguousarray(values, dtype=np.float32)
+                values = np.asarray(values)  # whole-number attributes (ids) stay int32
+                arrays[_NPZ_ATTRIBUTE_PREFIX + name] = np.ascontiguousarray(
+                    values, dtype=np.int32 if values.dtype.kind in "iub" else np.float32)
             with open(temporary, "wb") as stream:  # a file object: np.savez would append '.npz' to a name
                 np.savez(stream, **arrays)
         else:

@@ -1,15 +1,18 @@
 """Shared helpers of the headless Blender tests (not a test itself: the runners only run test_*.py).
 
-Each test script runs in its own process, either inside a Blender executable or as plain Python with the `bpy`
-module from PyPI (tests/blender/run_all.sh and run_bpy.sh):
-    blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_x.py -- --addon-path build/addon
-    build/venv-bpy/bin/python tests/blender/test_x.py -- --addon-path build/addon
-It runs its test_* functions in order and prints one line per test and a summary. Inside Blender a failure raises
+The tests run against the add-on as a user has it: tests/blender/run.sh installs a built zip into a fresh user
+folder with install.py (the extension zip through Blender's extension installer on 4.2+, the legacy zip through the
+add-on installer on 3.4) and then runs each test script in its own process, inside a Blender executable or as plain
+Python with the `bpy` module from PyPI:
+    tests/blender/run.sh /usr/bin/blender dist/meniscus-<version>-legacy-linux_x64.zip legacy
+    tests/blender/run.sh build/venv/bpy-5.2/bin/python dist/meniscus-<version>-linux_x64.zip extension
+A script enables the installed add-on (enable_addon) the way the Preferences checkbox does, then runs its test_*
+functions in order and prints one line per test and a summary. Inside Blender a failure raises
 at the end, which --python-exit-code turns into exit status 1. As a bpy module the process ends with os._exit:
 some bpy wheels crash while tearing down at interpreter exit, after every result was printed, which would turn a
 pass into a crash; the verdict is decided before that and flushed first.
 """
-import argparse
+import importlib
 import os
 import pathlib
 import sys
@@ -32,26 +35,33 @@ if AS_MODULE:
     bpy.ops.wm.read_factory_settings(use_empty=False)
 
 
-def script_arguments():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--addon-path", default=str(REPO / "build" / "addon"),
-                        help="folder that contains the staged 'meniscus' package")
-    return parser.parse_args(argv)
+# Set by run.sh: which package was installed, and the fresh user folder it was installed into.
+ADDON_KIND = os.environ.get("MENISCUS_ADDON_KIND", "extension")
+USER_DIR = os.environ.get("MENISCUS_USER_DIR", "")
 
 
-def import_addon(addon_path=None):
-    """Imports the staged package (not registered yet)."""
-    addon_path = os.path.abspath(addon_path or script_arguments().addon_path)
-    if not os.path.isdir(os.path.join(addon_path, "meniscus")):
-        raise FileNotFoundError(f"no 'meniscus' package in {addon_path}")
-    if addon_path not in sys.path:
-        sys.path.insert(0, addon_path)
-    import meniscus
+def addon_module_name():
+    """The add-on's module name: extensions live in the bl_ext namespace of their repository."""
+    return "bl_ext.user_default.meniscus" if ADDON_KIND == "extension" else "meniscus"
 
-    # Make sure we test the staged copy, not some other install that happens to be on the path.
-    assert os.path.dirname(os.path.dirname(os.path.abspath(meniscus.__file__))) == addon_path, meniscus.__file__
-    return meniscus
+
+def enable_addon():
+    """Enables the installed add-on as the Preferences checkbox does and returns its package. Fails unless it is the
+    copy run.sh installed into this run's user folder (never a source tree or a build folder)."""
+    import addon_utils
+
+    module = addon_utils.enable(addon_module_name(), default_set=True, handle_error=None)
+    check(module is not None, f"Blender could not enable {addon_module_name()} (see the traceback above)")
+    location = os.path.realpath(module.__file__)
+    check(USER_DIR and location.startswith(os.path.realpath(USER_DIR) + os.sep),
+          f"{addon_module_name()} was loaded from {location}, not from the installed copy in {USER_DIR!r}")
+    return module
+
+
+def addon_modules(addon, *names):
+    """The add-on's submodules by dotted name relative to its package, e.g. addon_modules(addon, "blender.handlers")."""
+    modules = [importlib.import_module(f"{addon.__name__}.{name}") for name in names]
+    return modules[0] if len(modules) == 1 else modules
 
 
 def clear_scene():

@@ -1,6 +1,6 @@
 """First light: the bundled double dam break becomes a surface that follows the frame, shades and renders.
 
-Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_first_light.py \
+Run: tests/blender/run.sh (installs the add-on from its zip first; see _support.py)
          -- --addon-path build/addon
 """
 import os
@@ -15,9 +15,8 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import _support  # noqa: E402
 from _support import check, mesh_counts  # noqa: E402
 
-meniscus = _support.import_addon()
-meniscus.register()
-from meniscus.blender import handlers, mesh_update  # noqa: E402  (after register: the subpackage needs bpy types)
+addon = _support.enable_addon()
+handlers, mesh_update = _support.addon_modules(addon, "blender.handlers", "blender.mesh_update")
 
 _support.clear_scene()
 scene = bpy.context.scene
@@ -304,7 +303,7 @@ def test_render_small_frame():
 
 def _cleanup():
     _temporary.cleanup()
-    meniscus.unregister()
+    addon.unregister()
 
 
 _support.run(globals(), cleanup=_cleanup)

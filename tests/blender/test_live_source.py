@@ -1,7 +1,7 @@
 """Live source: a surface around another object's particles, evaluated at the current frame (mesh vertices and a
 particle system), rebuilt when the source changes, skipped on motion-blur subframes.
 
-Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_live_source.py -- --addon-path build/addon
+Run: tests/blender/run.sh (installs the add-on from its zip first; see _support.py)
 """
 import os
 import sys
@@ -13,9 +13,8 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import _support  # noqa: E402
 from _support import check, mesh_counts  # noqa: E402
 
-meniscus = _support.import_addon()
-meniscus.register()
-from meniscus.blender import handlers, mesh_update  # noqa: E402
+addon = _support.enable_addon()
+handlers, mesh_update = _support.addon_modules(addon, "blender.handlers", "blender.mesh_update")
 
 RADIUS = 0.05
 _support.clear_scene()
@@ -120,4 +119,4 @@ def test_particle_system_is_surfaced():
     check(np.ptp(locations[:, 2]) > 0.05, "the particles should have moved off the emitter plane")
 
 
-_support.run(globals(), cleanup=meniscus.unregister)
+_support.run(globals(), cleanup=addon.unregister)

@@ -1,7 +1,7 @@
 """N-panel completeness: every pipeline parameter is a documented property that reaches the core; viewport and
 render cube sizes; weights and particle attributes as mesh attributes; the memory budget's refusal in the status.
 
-Run: blender -b --factory-startup --python-exit-code 1 --python tests/blender/test_parameters.py -- --addon-path build/addon
+Run: tests/blender/run.sh (installs the add-on from its zip first; see _support.py)
 """
 import os
 import sys
@@ -14,10 +14,9 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import _support  # noqa: E402
 from _support import check, mesh_counts  # noqa: E402
 
-meniscus = _support.import_addon()
-meniscus.register()
-from meniscus import api  # noqa: E402
-from meniscus.blender import handlers, mesh_update, panels  # noqa: E402
+addon = _support.enable_addon()
+api = addon.api
+handlers, mesh_update, panels = _support.addon_modules(addon, "blender.handlers", "blender.mesh_update", "blender.panels")
 
 _temporary = tempfile.TemporaryDirectory(prefix="meniscus_params_")
 _support.clear_scene()
@@ -101,8 +100,15 @@ def test_weights_and_particle_attributes_become_mesh_attributes():
     check(weights is not None and len(weights) == len(surface.data.vertices), "no 'weights' point attribute")
     check(surface.data.attributes["weights"].data_type == "FLOAT", surface.data.attributes["weights"].data_type)
     check(weights.min() >= -1e-5 and weights.max() <= 1.0 + 1e-5 and np.ptp(weights) > 0.1, (weights.min(), weights.max()))
-    ids = mesh_update.read_point_values(surface.data, "particle_id")  # Blender reserves 'id' for integers
-    check(ids is not None and np.isfinite(ids).all(), "interpolated 'id' attribute missing")
+    # Particle ids are whole numbers: each vertex carries its nearest particle's id (an average of ids would mean
+    # nothing), as an INT attribute; 'id' has a meaning of its own in Blender, so it is stored as 'particle_id' in
+    # every version, and the status says so.
+    ids = mesh_update.read_point_values(surface.data, "particle_id")
+    check(ids is not None and surface.data.attributes["particle_id"].data_type == "INT", "'id' not stored as INT particle_id")
+    particle_ids = api.read_particles(_support.SAMPLE_PATTERN.replace("####", "0030")).attributes["id"]
+    check(np.isin(ids, particle_ids).all(), "vertex ids must be ids of particles, not blends of them")
+    check(len(np.unique(ids)) > 100, f"only {len(np.unique(ids))} distinct ids on the surface")
+    check("'id' stored as 'particle_id'" in settings.status, settings.status)
     check("foam" in settings.status and not settings.status_is_error, settings.status)
     check(mesh_update.read_point_vectors(surface.data, "velocity") is not None, "velocity must stay")
     settings.output_weights = False
@@ -165,7 +171,7 @@ def test_renders_use_the_render_cube_size():
 
 def _cleanup():
     _temporary.cleanup()
-    meniscus.unregister()
+    addon.unregister()
 
 
 _support.run(globals(), cleanup=_cleanup)

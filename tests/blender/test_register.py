@@ -10,19 +10,28 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import _support  # noqa: E402
 from _support import check  # noqa: E402
 
-meniscus = _support.import_addon()
+addon = _support.enable_addon()
+addon.unregister()  # the tests below register and unregister themselves
 
 
 def count_ours(handler_list):
-    return sum(1 for function in handler_list if getattr(function, "__module__", "").startswith("meniscus."))
+    return sum(1 for function in handler_list if getattr(function, "__module__", "").startswith(addon.__name__ + "."))
+
+
+def operator_registered(idname):
+    # bpy.ops.<module>.<name> always builds a wrapper, registered or not; its RNA type exists only when registered.
+    try:
+        return getattr(bpy.ops.meniscus, idname).get_rna_type().identifier == "MENISCUS_OT_" + idname
+    except (KeyError, AttributeError):
+        return False
 
 
 def check_registered(expected):
     check(hasattr(bpy.types.Object, "meniscus") == expected, f"Object.meniscus registered should be {expected}")
     check(hasattr(bpy.types, "MENISCUS_OT_add_sequence") == expected, "operator registration")
     check(hasattr(bpy.types, "MENISCUS_PT_main") == expected, "panel registration")
-    check(hasattr(bpy.ops.meniscus, "add_sequence") and
-          (bpy.ops.meniscus.add_sequence.idname_py() == "meniscus.add_sequence") or not expected, "operator id")
+    for idname in ("add_sequence", "bake"):
+        check(operator_registered(idname) == expected, f"bpy.ops.meniscus.{idname} registered should be {expected}")
     count = 1 if expected else 0
     check(count_ours(bpy.app.handlers.frame_change_post) == count,
           f"frame_change_post holds {count_ours(bpy.app.handlers.frame_change_post)} Meniscus handlers, want {count}")
@@ -32,23 +41,23 @@ def check_registered(expected):
 
 def test_register_unregister_twice():
     for _ in range(2):
-        meniscus.register()
+        addon.register()
         check_registered(True)
-        meniscus.unregister()
+        addon.unregister()
         check_registered(False)
 
 
 def test_repeated_register_is_harmless():
-    meniscus.register()
-    meniscus.register()  # e.g. an add-on manager calling register again: must not duplicate handlers or raise
+    addon.register()
+    addon.register()  # e.g. an add-on manager calling register again: must not duplicate handlers or raise
     check_registered(True)
-    meniscus.unregister()
-    meniscus.unregister()
+    addon.unregister()
+    addon.unregister()
     check_registered(False)
 
 
 def test_handler_survives_file_load_and_relative_path_resolves():
-    meniscus.register()
+    addon.register()
     try:
         _support.clear_scene()
         with tempfile.TemporaryDirectory() as folder:
@@ -75,7 +84,7 @@ def test_handler_survives_file_load_and_relative_path_resolves():
                   f"surface did not rebuild after reload: {surface.meniscus.status!r}")
             check(surface.meniscus.status.startswith("double_dam_break_0025"), surface.meniscus.status)
     finally:
-        meniscus.unregister()
+        addon.unregister()
     check_registered(False)
 
 
@@ -83,21 +92,22 @@ def test_enable_disable_through_addon_utils():
     # The path Blender's preferences take: addon_utils imports the package by name and calls register().
     import addon_utils
 
-    module = addon_utils.enable("meniscus", default_set=False, handle_error=None)
-    check(module is not None, "addon_utils could not enable meniscus")
+    name = _support.addon_module_name()
+    module = addon_utils.enable(name, default_set=False, handle_error=None)
+    check(module is addon, f"addon_utils could not enable {name}")
     check_registered(True)
-    addon_utils.disable("meniscus", default_set=False, handle_error=None)
+    addon_utils.disable(name, default_set=False, handle_error=None)
     check_registered(False)
 
 
 def test_frame_change_without_addon_is_inert():
     # After unregistering, changing frames must not touch the meshes (no stray handler left behind).
     bpy.ops.wm.read_homefile(use_empty=True)
-    meniscus.register()
+    addon.register()
     obj = _support.add_sample_sequence()
     bpy.context.scene.frame_set(_support.SAMPLE_FIRST)
     vertices = len(obj.data.vertices)
-    meniscus.unregister()
+    addon.unregister()
     bpy.context.scene.frame_set(_support.SAMPLE_FIRST + 7)
     check(len(obj.data.vertices) == vertices, "mesh changed after unregister")
 

@@ -10,8 +10,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import _support  # noqa: E402
 from _support import check  # noqa: E402
 
-meniscus = _support.import_addon()
-meniscus.register()
+addon = _support.enable_addon()
 _support.clear_scene()
 scene = bpy.context.scene
 surface = _support.add_sample_sequence()
@@ -56,4 +55,4 @@ def test_animation_render_with_motion_blur():
     check(not surface.meniscus.status_is_error, surface.meniscus.status)
 
 
-_support.run(globals(), cleanup=meniscus.unregister)
+_support.run(globals(), cleanup=addon.unregister)

@@ -1,4 +1,4 @@
-"""Makes the staged add-on (build/addon) importable and gives tests the shared data and the CLI."""
+"""Makes the staged package (build/python) importable and gives tests the shared data and the CLI."""
 import os
 import pathlib
 import sys
@@ -7,7 +7,7 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 BUILD = pathlib.Path(os.environ.get("MENISCUS_BUILD", ROOT / "build"))
-sys.path.insert(0, str(BUILD / "addon"))
+sys.path.insert(0, str(BUILD / "python"))
 SHARED = ROOT.parent / "shared" / "data"
 
 

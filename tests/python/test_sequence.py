@@ -8,7 +8,7 @@ import pytest
 
 # Load the module from its source file: it has no dependencies, so these tests run before (or without) the
 # compiled core that `import meniscus` needs.
-_SOURCE = pathlib.Path(__file__).resolve().parents[2] / "addon" / "meniscus" / "sequence.py"
+_SOURCE = pathlib.Path(__file__).resolve().parents[2] / "python" / "meniscus" / "sequence.py"
 _spec = importlib.util.spec_from_file_location("meniscus_sequence_under_test", _SOURCE)
 sequence = importlib.util.module_from_spec(_spec)
 sys.modules[_spec.name] = sequence  # dataclasses look the module up by name

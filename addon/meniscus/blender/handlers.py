@@ -144,11 +144,14 @@ def _set_status(settings, text, is_error=False):
 
 
 def _write(mesh, settings, surface):
-    """Writes a reconstructed or loaded surface into the Blender mesh; returns the seconds it took."""
+    """Writes a reconstructed or loaded surface into the Blender mesh; returns the seconds it took and a status
+    note on attributes stored under another name or not at all (the user must find what they asked for)."""
     started = time.perf_counter()
     normals = surface.normals if settings.use_custom_normals else None
-    mesh_update.write_surface(mesh, surface.vertices, surface.triangles, normals, surface.attributes)
-    return time.perf_counter() - started
+    elsewhere = mesh_update.write_surface(mesh, surface.vertices, surface.triangles, normals, surface.attributes)
+    notes = [f"'{name}' stored as '{stored}'" if stored else f"'{name}' not stored (no Blender type for its shape)"
+             for name, stored in sorted(elsewhere.items())]
+    return time.perf_counter() - started, "; ".join(notes)
 
 
 def _status_lines(*lines):
@@ -175,13 +178,13 @@ def _file_source(obj, settings, mesh, scene_time, for_render):
         if lookup.path is None:
             return _empty_for(mesh, lookup, scene_time, "file")
         result = cache.reconstruct_file(lookup.path, arguments, wanted)
-        blender_seconds = _write(mesh, settings, result.mesh)
+        blender_seconds, attribute_note = _write(mesh, settings, result.mesh)
         return _status_lines(
             os.path.basename(lookup.path) + (" (render)" if for_render else ""),
             f"{result.particle_count:,} particles",
             f"{len(result.mesh.triangles):,} triangles",
             f"{result.seconds:.2f} s + {blender_seconds:.2f} s in Blender",
-            _missing_note(result))
+            _missing_note(result), attribute_note)
 
     return key, work
 
@@ -197,11 +200,11 @@ def _cache_source(obj, settings, mesh, scene_time):
         started = time.perf_counter()
         surface = cache.load_mesh(lookup.path)
         loaded = time.perf_counter() - started
-        blender_seconds = _write(mesh, settings, surface)
+        blender_seconds, attribute_note = _write(mesh, settings, surface)
         return _status_lines(
             f"{os.path.basename(lookup.path)} (cache)",
             f"{len(surface.triangles):,} triangles",
-            f"{loaded:.2f} s loading + {blender_seconds:.2f} s in Blender")
+            f"{loaded:.2f} s loading + {blender_seconds:.2f} s in Blender", attribute_note)
 
     return key, work
 
@@ -221,13 +224,13 @@ def _object_source(obj, settings, mesh, depsgraph, for_render):
 
     def work():
         result = cache.reconstruct_positions(positions, attributes, arguments, wanted)
-        blender_seconds = _write(mesh, settings, result.mesh)
+        blender_seconds, attribute_note = _write(mesh, settings, result.mesh)
         return _status_lines(
             f"{source.name}: {kind}" + (" (render)" if for_render else ""),
             f"{result.particle_count:,} particles",
             f"{len(result.mesh.triangles):,} triangles",
             f"{result.seconds:.2f} s + {blender_seconds:.2f} s in Blender",
-            _missing_note(result))
+            _missing_note(result), attribute_note)
 
     return key, work
 

