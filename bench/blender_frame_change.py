@@ -24,7 +24,7 @@ parts are timed inside the same call by wrapping, in this process only, the func
   core     meniscus.api.reconstruct               (the C++ core incl. its pybind11 call; core_stages = the
                                                    core's own per-stage seconds, mesh.stats)
   write    meniscus.blender.mesh_update.write_surface (arrays -> Blender mesh: geometry, attributes, normals)
-  handler  meniscus.blender.handlers.update_scene (the whole frame_change_post work)
+  handler  meniscus.blender.update.update_scene (the whole frame_change_post work)
   Blender  = total - core - read = write + add-on glue + depsgraph evaluation and the rest of frame_set
 Every frame change goes to another file, so each one reconstructs. The first frame change after the parameters are
 set is a warm-up (the mesh grows from the add operator's coarse preview to 1 M triangles, attributes are created)
@@ -194,7 +194,7 @@ def run_blender(arguments):
     scene.frame_set(1)
     result = bpy.ops.meniscus.add_sequence(filepath=str(paths[0]), particle_radius=RADIUS)
     assert result == {"FINISHED"}, result
-    obj = next(o for o in bpy.data.objects if handlers.is_surface(o))
+    obj = next(o for o in bpy.data.objects if update.is_surface(o))
     settings = obj.meniscus
     assert (settings.frame_start, settings.frame_end) == (1, FRAMES), (settings.frame_start, settings.frame_end)
 
@@ -205,11 +205,11 @@ def run_blender(arguments):
     settings.smoothing_length, settings.iso_threshold = 2.0, 0.6
     settings.decimate_barnacles, settings.mesh_cleanup = True, False
     settings.smoothing_iterations, settings.smoothing_strength = 25, 1.0
-    settings.use_feature_weights, settings.weights_normalization_auto, settings.volume_restoration = True, True, True
+    settings.smoothing_weights, settings.weights_normalization_auto, settings.volume_restoration = True, True, True
     settings.normal_smoothing_iterations, settings.sph_normals = 10, False
-    settings.threads = 0
+    settings.threads_auto = True
     settings.is_surface = True
-    parameters = handlers.reconstruction_arguments(settings, for_render=False)
+    parameters = update.reconstruction_arguments(settings, for_render=False)
 
     load_before = os.getloadavg()
     record = {"blender": bpy.app.version_string, "as_module": as_module, "cube_size": CUBE_SIZE, "radius": RADIUS,

@@ -20,8 +20,10 @@
 
 #include "base/errors.h"
 #include "io/io.h"
+#include "io/io_util.h"
 #include "base/memory.h"
 #include "base/parallel.h"
+#include "parameters.h"
 #include "pipeline.h"
 #include "base/platform.h"
 #include "post/postprocess.h"
@@ -110,12 +112,6 @@ private:
     std::chrono::steady_clock::time_point start_;
 };
 
-bool parse_on_off(const std::string& value, const std::string& flag) {
-    if (value == "on" || value == "true" || value == "1") return true;
-    if (value == "off" || value == "false" || value == "0") return false;
-    throw InputError(flag + " takes on or off, got '" + value + "'");
-}
-
 json stats_json(const PipelineStats& stats) {
     json out;
     out["seconds"] = json::object();
@@ -159,17 +155,58 @@ json quality_json(const MeshQuality& q) {
 
 struct ReconstructArgs {
     std::string input, output, raw_output, stats_path;
-    ReconstructionParams reconstruction;
-    PostprocessParams post;
-    ExecutionOptions execution;
+    Parameters parameters;  // the pipeline's, filled from the schema's flags
     std::optional<long> start, end;
     std::vector<std::string> attributes;
     bool check = false;
     bool quiet = false;
-    double memory_budget_gib = 0.0;
-    std::string weights_switch = "on", weights_normalization = "auto", decimate_switch = "on", cleanup_switch = "off", normals_switch = "on",
-                sph_normals_switch = "off", restoration_switch = "on";
 };
+
+// The text of a schema parameter's command-line value as a number: on|off for switches, the automatic word
+// (auto, all) where there is one, a number otherwise. Errors name the flag in the user's spelling.
+double parse_parameter(const ParameterSpec& spec, const std::string& flag, const std::string& text) {
+    double value = 0.0;
+    if (spec.cli_style == CliStyle::on_off) {
+        if (text == "on" || text == "true" || text == "1" || text == "yes") return 1.0;
+        if (text == "off" || text == "false" || text == "0" || text == "no") return 0.0;
+        throw CLI::ValidationError(flag, "takes on or off, got '" + text + "'");
+    }
+    if (spec.automatic && text == spec.automatic_word) return *spec.automatic;
+    if (!io_detail::parse_double(text, value))
+        throw CLI::ValidationError(flag, "takes " + spec.allowed() + ", got '" + text + "'");
+    if (auto problem = spec.problem(value)) throw CLI::ValidationError(flag, *problem);
+    return value;
+}
+
+std::string cli_value_text(const ParameterSpec& spec, double value) {
+    if (spec.automatic && value == *spec.automatic) return spec.automatic_word;
+    if (spec.cli_style == CliStyle::on_off) return value != 0.0 ? "on" : "off";
+    return format_number(value);
+}
+
+// One flag per schema parameter, with its help text, unit, allowed values and default.
+void add_parameter_flags(CLI::App& command, Parameters& parameters) {
+    for (const ParameterSpec& spec : parameter_schema()) {
+        // The name messages use: the first long name (-r,--particle-radius -> --particle-radius).
+        const std::size_t long_start = spec.cli.find("--");
+        const std::string flag = spec.cli.substr(long_start, spec.cli.find(',', long_start) - long_start);
+        std::string help = spec.help;
+        if (!spec.unit.empty()) help += " [" + spec.unit + "]";
+        if (spec.cli_style == CliStyle::flag) {
+            command.add_flag_callback(spec.cli, [&parameters, &spec] { spec.set(parameters, 1.0); }, help);
+            continue;
+        }
+        if (spec.cli_style == CliStyle::value) help += "; " + spec.allowed();
+        CLI::Option* option = command.add_option_function<std::string>(
+            spec.cli, [&parameters, &spec, flag](const std::string& text) { spec.set(parameters, parse_parameter(spec, flag, text)); },
+            help);
+        option->type_name(spec.cli_style == CliStyle::on_off ? "on|off" : spec.automatic ? "NUMBER|" + spec.automatic_word : "NUMBER");
+        if (spec.required)
+            option->required();
+        else
+            option->default_str(cli_value_text(spec, spec.default_value()));
+    }
+}
 
 // Runs one frame; returns the frame's JSON record. Throws on failure (the caller reports and goes on).
 json run_frame(const ReconstructArgs& args, const std::string& input, const std::string& output, const std::string& raw_output,
@@ -185,12 +222,10 @@ json run_frame(const ReconstructArgs& args, const std::string& input, const std:
             for (const auto& other : particles.attributes) available += (available.empty() ? "" : ", ") + other.name;
             throw InputError(input + ": no particle attribute '" + name + "' (the file has: " + (available.empty() ? "none" : available) + ")");
         }
-        inputs.push_back({a->name, a->values.data(), a->components});
+        inputs.push_back({a->name, a->values.data(), a->components, a->integral});
     }
     PipelineOptions options;
-    options.reconstruction = args.reconstruction;
-    options.postprocess = args.post;
-    options.execution = args.execution;
+    static_cast<Parameters&>(options) = args.parameters;
     options.keep_raw_mesh = !raw_output.empty();
     PipelineResult result;
     try {
@@ -223,27 +258,7 @@ json run_frame(const ReconstructArgs& args, const std::string& input, const std:
 }
 
 int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
-    args.post.smoothing_weights = parse_on_off(args.weights_switch, "--mesh-smoothing-weights");
-    args.post.decimate_barnacles = parse_on_off(args.decimate_switch, "--decimate-barnacles");
-    args.post.mesh_cleanup = parse_on_off(args.cleanup_switch, "--mesh-cleanup");
-    args.post.normals = parse_on_off(args.normals_switch, "--normals");
-    args.post.sph_normals = parse_on_off(args.sph_normals_switch, "--sph-normals");
-    args.post.volume_restoration = parse_on_off(args.restoration_switch, "--mesh-smoothing-volume-restoration");
-    if (args.weights_normalization == "auto") {
-        args.post.weights_normalization = 0.0;
-    } else {
-        try {
-            args.post.weights_normalization = std::stod(args.weights_normalization);
-        } catch (...) {
-            throw InputError("--mesh-smoothing-weights-normalization takes auto or a positive number, got '" + args.weights_normalization + "'");
-        }
-        if (!(args.post.weights_normalization > 0.0))
-            throw InputError("--mesh-smoothing-weights-normalization must be positive, got '" + args.weights_normalization + "'");
-    }
-    if (args.memory_budget_gib < 0.0) throw InputError("--memory-budget must be >= 0 GiB");
-    args.execution.memory_budget_bytes = static_cast<std::size_t>(args.memory_budget_gib * 1024.0 * 1024.0 * 1024.0);
-    validate(args.reconstruction);
-    validate(args.post);
+    validate(args.parameters);
 
     std::vector<Frame> frames;
     const bool sequence = is_sequence(args.input);
@@ -268,11 +283,15 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
 
     Progress progress(frames.size(), !args.quiet && is_terminal(stderr));
     json report;
-    report["parameters"] = {{"particle_radius", args.reconstruction.particle_radius},
-                            {"smoothing_length", args.reconstruction.smoothing_length},
-                            {"cube_size", args.reconstruction.cube_size},
-                            {"iso_threshold", args.reconstruction.iso_threshold},
-                            {"threads", resolve_threads(args.execution.threads)}};
+    report["parameters"] = json::object();
+    for (const ParameterSpec& spec : parameter_schema()) {
+        const double value = spec.get(args.parameters);
+        if (spec.type == ParameterType::flag)
+            report["parameters"][spec.name] = value != 0.0;
+        else
+            report["parameters"][spec.name] = value;
+    }
+    report["parameters"]["threads_used"] = resolve_threads(args.parameters.execution.threads);
     report["frames"] = json::array();
     std::size_t failed = 0, done = 0;
     const auto start = std::chrono::steady_clock::now();
@@ -374,34 +393,15 @@ int run_cli(const std::vector<std::string>& arguments, const CliHooks& hooks) {
     CLI::App* reconstruct = app.add_subcommand("reconstruct", "Reconstruct the surface of a particle file or sequence");
     reconstruct->add_option("input", args.input, "Particle file (VTK, VTU, BGEO, PLY, XYZ, NPY/NPZ, CSV); '{}' in the name stands for the frame number")->required();
     reconstruct->add_option("-o,--output-file", args.output, "Output mesh (.ply, .obj, .vtk); '{}' for the frame number")->required();
-    reconstruct->add_option("-r,--particle-radius", args.reconstruction.particle_radius, "Particle radius (absolute)")->required();
-    reconstruct->add_option("-l,--smoothing-length", args.reconstruction.smoothing_length, "Smoothing length, multiple of r (support 2*l*r)")->capture_default_str();
-    reconstruct->add_option("-c,--cube-size", args.reconstruction.cube_size, "Marching-cubes cube size, multiple of r")->capture_default_str();
-    reconstruct->add_option("-t,--surface-threshold", args.reconstruction.iso_threshold, "Iso threshold of the colour field")->capture_default_str();
     reconstruct->add_option("-s,--start-index", args.start, "First frame of a sequence");
     reconstruct->add_option("-e,--end-index", args.end, "Last frame of a sequence");
-    reconstruct->add_option("-n,--threads", args.execution.threads, "Threads (0: all cores)")->capture_default_str();
     reconstruct->add_option("--stats", args.stats_path, "Write per-stage seconds, counts and peak memory as JSON");
-    reconstruct->add_option("-a,--interpolate-attribute", args.attributes, "Particle attribute to interpolate onto the mesh (repeatable)");
-    args.post.smoothing_iterations = 25;
-    args.post.normal_smoothing_iterations = 10;
-    reconstruct->add_option("--mesh-smoothing-iters", args.post.smoothing_iterations, "Weighted Laplacian smoothing iterations")->capture_default_str();
-    reconstruct->add_option("--mesh-smoothing-weights", args.weights_switch, "Feature weights on|off (off: plain uniform smoothing)")->capture_default_str();
-    reconstruct->add_option("--mesh-smoothing-weights-normalization", args.weights_normalization, "Half-space count N_HS: auto or a number")->capture_default_str();
-    reconstruct->add_option("--mesh-smoothing-beta", args.post.smoothing_beta, "Smoothing step scale in (0, 1]")->capture_default_str();
-    reconstruct->add_option("--mesh-smoothing-volume-restoration", args.restoration_switch,
-                            "Give each connected component back the volume smoothing took on|off")->capture_default_str();
-    reconstruct->add_option("--decimate-barnacles", args.decimate_switch, "Remove single/double-vertex MC configurations on|off")->capture_default_str();
-    reconstruct->add_option("--mesh-cleanup", args.cleanup_switch, "Collapse vertices sharing a grid point on|off")->capture_default_str();
-    reconstruct->add_option("--mesh-cleanup-snap-dist", args.post.mesh_cleanup_snap_distance, "Cleanup only within this distance (multiple of the cube size) of a grid point");
-    reconstruct->add_option("--normals", args.normals_switch, "Vertex normals on|off")->capture_default_str();
-    reconstruct->add_option("--normals-smoothing-iters", args.post.normal_smoothing_iterations, "Normal smoothing iterations")->capture_default_str();
-    reconstruct->add_option("--sph-normals", args.sph_normals_switch, "Normals from the colour-field gradient on|off")->capture_default_str();
-    reconstruct->add_flag("--output-smoothing-weights", args.post.output_weights, "Write the feature weights as vertex attribute 'weights'");
+    reconstruct->add_option("-a,--interpolate-attribute", args.attributes,
+                            "Particle attribute to carry onto the mesh (repeatable); whole-number fields (ids) come from the "
+                            "nearest particle");
     reconstruct->add_option("--output-raw-mesh", args.raw_output, "Also write the mesh before post-processing");
     reconstruct->add_flag("--check-mesh", args.check, "Check closed, manifold, oriented; a failing frame is reported");
-    reconstruct->add_flag("--skip-invalid", args.execution.skip_invalid, "Drop particles with NaN/Inf coordinates instead of failing");
-    reconstruct->add_option("--memory-budget", args.memory_budget_gib, "Refuse frames needing more than this many GiB (0: 75% of RAM)");
+    add_parameter_flags(*reconstruct, args.parameters);
     reconstruct->add_flag("-q,--quiet", args.quiet, "No progress bar or summary");
 
     std::string mesh_path, raw_path, json_path;
@@ -417,7 +417,7 @@ int run_cli(const std::vector<std::string>& arguments, const CliHooks& hooks) {
     try {
         app.parse(static_cast<int>(argv.size()), argv.data());
     } catch (const CLI::ParseError& e) {
-        return app.exit(e);
+        return app.exit(e) == 0 ? 0 : 2;  // --help is not an error; every usage error is status 2
     }
     try {
         if (*reconstruct) return reconstruct_command(args, hooks);

@@ -14,18 +14,6 @@
 
 namespace meniscus {
 
-void validate(const PostprocessParams& p) {
-    if (p.smoothing_iterations < 0) throw InputError("smoothing_iterations must be >= 0, got " + std::to_string(p.smoothing_iterations));
-    if (!(p.smoothing_beta > 0.0 && p.smoothing_beta <= 1.0))
-        throw InputError("smoothing_beta must be in (0, 1], got " + std::to_string(p.smoothing_beta));
-    if (!std::isfinite(p.weights_normalization) || p.weights_normalization < 0.0)
-        throw InputError("weights_normalization must be 0 (automatic) or a positive number, got " + std::to_string(p.weights_normalization));
-    if (p.normal_smoothing_iterations < 0)
-        throw InputError("normal_smoothing_iterations must be >= 0, got " + std::to_string(p.normal_smoothing_iterations));
-    if (!std::isfinite(p.mesh_cleanup_snap_distance))
-        throw InputError("mesh_cleanup_snap_distance must be finite (negative: no limit)");
-}
-
 namespace {
 
 // Last line of defence for the host application: every vertex must be finite and near the particles (a single
@@ -60,8 +48,7 @@ void guard_vertices(TriMesh& mesh, const SurfaceReconstruction& r, PipelineStats
 }  // namespace
 
 PipelineResult run_pipeline(const PositionsView& positions, const std::vector<AttributeInput>& attributes, const PipelineOptions& options) {
-    validate(options.reconstruction);
-    validate(options.postprocess);
+    validate(static_cast<const Parameters&>(options));
     for (const auto& a : attributes) {
         if (a.components < 1 || a.components > 16)
             throw InputError("attribute '" + a.name + "' must have 1 to 16 components, got " + std::to_string(a.components));
@@ -114,7 +101,7 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         const std::vector<int32_t> labels = component_labels(mesh, &components);
         const std::vector<double> volumes = component_volumes(mesh, labels, components, threads);
         const std::vector<float> before = mesh.vertices;
-        laplacian_smooth(mesh, adjacency, smoothing_amount, post.smoothing_iterations, post.smoothing_beta, threads);
+        laplacian_smooth(mesh, adjacency, smoothing_amount, post.smoothing_iterations, post.smoothing_strength, threads);
         timer.stop();
         if (post.volume_restoration) {
             StageTimer restoration_timer(&stats, "volume restoration");

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "mesh/mesh.h"
-#include "params.h"
+#include "parameters.h"
 #include "sph/particles.h"
 #include "base/stats.h"
 
@@ -21,10 +21,7 @@ struct AttributeInput {
     bool integral = false;  // whole numbers (ids, labels): the nearest particle's value, not an average
 };
 
-struct PipelineOptions {
-    ReconstructionParams reconstruction;
-    PostprocessParams postprocess;
-    ExecutionOptions execution;
+struct PipelineOptions : Parameters {
     bool keep_raw_mesh = false;  // also return the mesh as marching cubes made it
 };
 
@@ -36,7 +33,5 @@ struct PipelineResult {
 };
 
 PipelineResult run_pipeline(const PositionsView& positions, const std::vector<AttributeInput>& attributes, const PipelineOptions& options);
-
-void validate(const PostprocessParams& params);
 
 }  // namespace meniscus

@@ -15,6 +15,7 @@
 #include "cli.h"
 #include "base/errors.h"
 #include "io/io.h"
+#include "parameters.h"
 #include "pipeline.h"
 #include "post/postprocess.h"
 
@@ -120,11 +121,35 @@ PositionsView positions_view(const py::array& positions) {
     return PositionsView(static_cast<const double*>(positions.data()), n);
 }
 
-py::dict reconstruct(const py::array& positions, double particle_radius, double smoothing_length, double cube_size, double iso_threshold,
-                     const py::dict& attributes, bool mesh_cleanup, double mesh_cleanup_snap_distance, bool decimate_barnacles,
-                     int smoothing_iterations, double smoothing_beta, bool smoothing_weights, double weights_normalization,
-                     bool weights_smoothstep, bool volume_restoration, bool output_weights, bool normals, int normal_smoothing_iterations, bool sph_normals, int threads,
-                     std::size_t memory_budget, bool skip_invalid, bool keep_raw_mesh) {
+// A Python value for a parameter, as the schema's type asks: flags from True/False, counts from whole numbers,
+// reals from any number. Errors name the parameter by its keyword.
+double value_from_python(const ParameterSpec& spec, const py::handle& value) {
+    const std::string got = py::repr(value).cast<std::string>();
+    if (spec.type == ParameterType::flag) {
+        const bool numpy_bool = py::hasattr(value, "dtype") && py::str(value.attr("dtype").attr("kind")).cast<std::string>() == "b";
+        if (!py::isinstance<py::bool_>(value) && !numpy_bool) throw InputError(spec.name + " must be True or False, got " + got);
+        return value.cast<bool>() ? 1.0 : 0.0;
+    }
+    if (!PyNumber_Check(value.ptr()) || py::isinstance<py::str>(value)) throw InputError(spec.name + " must be " + spec.allowed() + ", got " + got);
+    return py::float_(py::reinterpret_borrow<py::object>(value)).cast<double>();
+}
+
+// Keyword arguments -> parameters: the one place Python values meet the schema. Unknown names, wrong types and
+// values outside the allowed range are refused naming the keyword; a parameter not given keeps its default.
+Parameters parameters_from_python(const py::dict& values) {
+    Parameters parameters;
+    for (const auto& item : values) {
+        const ParameterSpec& spec = find_parameter(py::str(item.first));
+        const double value = value_from_python(spec, item.second);
+        if (auto problem = spec.problem(value)) throw InputError(spec.name + " " + *problem);
+        spec.set(parameters, value);
+    }
+    for (const auto& spec : parameter_schema())
+        if (spec.required && !values.contains(spec.name)) throw InputError(spec.name + " is required (" + spec.help + ")");
+    return parameters;
+}
+
+py::dict reconstruct(const py::array& positions, const py::dict& attributes, const py::dict& parameters, bool keep_raw_mesh) {
     const PositionsView view = positions_view(positions);
     std::vector<AttributeInput> inputs;
     std::vector<AttributeArray> arrays;
@@ -135,23 +160,7 @@ py::dict reconstruct(const py::array& positions, double particle_radius, double 
         inputs.push_back({name, arrays.back().values, arrays.back().components, arrays.back().integral});
     }
     PipelineOptions options;
-    options.reconstruction = {particle_radius, smoothing_length, cube_size, iso_threshold};
-    PostprocessParams& p = options.postprocess;
-    p.mesh_cleanup = mesh_cleanup;
-    p.mesh_cleanup_snap_distance = mesh_cleanup_snap_distance;
-    p.decimate_barnacles = decimate_barnacles;
-    p.smoothing_iterations = smoothing_iterations;
-    p.smoothing_beta = smoothing_beta;
-    p.smoothing_weights = smoothing_weights;
-    p.weights_normalization = weights_normalization;
-    p.weights_smoothstep = weights_smoothstep;
-    p.volume_restoration = volume_restoration;
-    p.output_weights = output_weights;
-    p.normals = normals;
-    p.normal_smoothing_iterations = normal_smoothing_iterations;
-    p.sph_normals = sph_normals;
-    if (threads < 0) throw InputError("threads must be >= 0 (0: all cores), got " + std::to_string(threads));
-    options.execution = {threads, memory_budget, skip_invalid};
+    static_cast<Parameters&>(options) = parameters_from_python(parameters);
     options.keep_raw_mesh = keep_raw_mesh;
 
     PipelineResult result;
@@ -247,6 +256,38 @@ int run_cli_in_python(const std::vector<std::string>& arguments) {
     return status;
 }
 
+py::list schema_to_list() {
+    static const char* const kTypes[] = {"flag", "count", "real"};
+    static const char* const kCliStyles[] = {"value", "on_off", "flag"};
+    py::list out;
+    for (const auto& spec : parameter_schema()) {
+        py::dict d;
+        d["name"] = spec.name;
+        d["group"] = spec.group;
+        d["type"] = kTypes[static_cast<int>(spec.type)];
+        d["label"] = spec.label;
+        d["cli"] = spec.cli;
+        d["cli_style"] = kCliStyles[static_cast<int>(spec.cli_style)];
+        d["unit"] = spec.unit;
+        d["help"] = spec.help;
+        d["default"] = spec.default_value();
+        d["minimum"] = spec.minimum;
+        d["maximum"] = spec.maximum;
+        d["minimum_open"] = spec.minimum_open;
+        d["maximum_open"] = spec.maximum_open;
+        d["automatic"] = spec.automatic ? py::object(py::float_(*spec.automatic)) : py::object(py::none());
+        d["automatic_word"] = spec.automatic_word;
+        d["suggested"] = spec.suggested;
+        d["soft_minimum"] = spec.soft_minimum;
+        d["soft_maximum"] = spec.soft_maximum;
+        d["required"] = spec.required;
+        d["depends_on"] = spec.depends_on;
+        d["allowed"] = spec.allowed();
+        out.append(d);
+    }
+    return out;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_core, m) {
@@ -266,14 +307,16 @@ PYBIND11_MODULE(_core, m) {
         }
     });
 
-    m.def("reconstruct", &reconstruct, py::arg("positions"), py::arg("particle_radius"), py::arg("smoothing_length") = 2.0,
-          py::arg("cube_size") = 0.5, py::arg("iso_threshold") = 0.6, py::arg("attributes") = py::dict(), py::arg("mesh_cleanup") = false,
-          py::arg("mesh_cleanup_snap_distance") = -1.0, py::arg("decimate_barnacles") = false, py::arg("smoothing_iterations") = 0,
-          py::arg("smoothing_beta") = 1.0, py::arg("smoothing_weights") = true, py::arg("weights_normalization") = 0.0,
-          py::arg("weights_smoothstep") = true, py::arg("volume_restoration") = true, py::arg("output_weights") = false, py::arg("normals") = true,
-          py::arg("normal_smoothing_iterations") = 0, py::arg("sph_normals") = false, py::arg("threads") = 0, py::arg("memory_budget") = 0,
-          py::arg("skip_invalid") = false, py::arg("keep_raw_mesh") = false,
-          "Runs the pipeline on (N, 3) float32/float64 positions; returns a dict of numpy arrays and stats.");
+    m.def("reconstruct", &reconstruct, py::arg("positions"), py::arg("attributes"), py::arg("parameters"),
+          py::arg("keep_raw_mesh") = false,
+          "Runs the pipeline on (N, 3) float32/float64 positions with parameters named as in parameter_schema(); "
+          "returns a dict of numpy arrays and stats.");
+    m.def("parameter_schema", &schema_to_list, "Every pipeline parameter: name, type, default, range, unit, help, spellings.");
+    m.def("parameter_problem", [](const std::string& name, double value) -> py::object {
+        const auto problem = find_parameter(name).problem(value);
+        return problem ? py::object(py::str(*problem)) : py::object(py::none());
+    }, py::arg("name"), py::arg("value"), "What is wrong with a value for a parameter ('must be ..., got ...'), or None.");
+    m.def("format_number", &format_number, py::arg("value"), "A number as people write it (0, 0.5, 2.5e-06).");
     m.def("run_cli", &run_cli_in_python, py::arg("arguments"),
           "Runs the meniscus command line (arguments[0] is the program name); returns the exit status.");
     m.def("read_particles", &read_particle_file, py::arg("path"), "Reads a particle file: dict with 'positions' (N, 3) float32 and 'attributes'.");

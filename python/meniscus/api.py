@@ -13,9 +13,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Dict, Optional
 
+import inspect
+
 import numpy as np
 
 from . import _core
+from . import parameters as _parameters
 
 __all__ = ["FormatError", "Mesh", "Particles", "__version__", "assess_quality", "check_mesh", "read_mesh",
            "read_particles", "reconstruct", "write_mesh"]
@@ -67,36 +70,49 @@ def read_particles(path) -> Particles:
     return Particles(data["positions"], data["attributes"])
 
 
-def reconstruct(positions, particle_radius: float, smoothing_length: float = 2.0, cube_size: float = 0.5,
-                iso_threshold: float = 0.6, *, attributes: Optional[Dict[str, np.ndarray]] = None,
-                mesh_cleanup: bool = False, mesh_cleanup_snap_distance: float = -1.0, decimate_barnacles: bool = False,
-                smoothing_iterations: int = 0, smoothing_beta: float = 1.0, smoothing_weights: bool = True,
-                weights_normalization: float = 0.0, weights_smoothstep: bool = True, volume_restoration: bool = True,
-                output_weights: bool = False,
-                normals: bool = True, normal_smoothing_iterations: int = 0, sph_normals: bool = False,
-                threads: int = 0, memory_budget: int = 0, skip_invalid: bool = False,
-                keep_raw_mesh: bool = False) -> Mesh:
-    """Reconstructs the fluid surface of (N, 3) float32/float64 C-contiguous positions (read without a copy).
-
-    Lengths follow splashsurf: particle_radius is absolute, smoothing_length and cube_size are multiples of it
-    (kernel support 2 * smoothing_length * particle_radius). weights_normalization 0 means automatic. Raises
-    ValueError naming a bad argument and MemoryError (with the estimate) when the grid exceeds the memory budget.
-    """
+def reconstruct(positions, particle_radius, *, attributes: Optional[Dict[str, np.ndarray]] = None,
+                keep_raw_mesh: bool = False, **parameters) -> Mesh:
+    # The signature and the parameters' documentation are filled in from the schema below (see parameters.py).
+    unknown = sorted(set(parameters) - set(_parameters.BY_NAME))
+    if unknown:
+        raise TypeError(f"reconstruct() got unknown parameter(s) {', '.join(map(repr, unknown))}; "
+                        f"the parameters are: {', '.join(_parameters.BY_NAME)}")
     converted = {}
     for name, values in (attributes or {}).items():
         converted[str(name)] = _attribute_array(values)
-    result = _core.reconstruct(
-        positions, float(particle_radius), float(smoothing_length), float(cube_size), float(iso_threshold), converted,
-        bool(mesh_cleanup), float(mesh_cleanup_snap_distance), bool(decimate_barnacles), int(smoothing_iterations),
-        float(smoothing_beta), bool(smoothing_weights), float(weights_normalization), bool(weights_smoothstep),
-        bool(volume_restoration), bool(output_weights), bool(normals), int(normal_smoothing_iterations), bool(sph_normals), int(threads),
-        int(memory_budget), bool(skip_invalid), bool(keep_raw_mesh))
+    result = _core.reconstruct(positions, converted, {"particle_radius": particle_radius, **parameters},
+                               bool(keep_raw_mesh))
     mesh = _mesh(result)
     mesh.stats = result["stats"]
     mesh.weights_normalization = result["weights_normalization"]
     if result["raw"] is not None:
         mesh.raw = _mesh(result["raw"])
     return mesh
+
+
+def _document_reconstruct():
+    """reconstruct()'s signature and docstring from the schema: help(), IDEs and inspect show every parameter."""
+    keyword = inspect.Parameter.KEYWORD_ONLY
+    signature = [inspect.Parameter("positions", inspect.Parameter.POSITIONAL_OR_KEYWORD),
+                 inspect.Parameter("particle_radius", inspect.Parameter.POSITIONAL_OR_KEYWORD),
+                 inspect.Parameter("attributes", keyword, default=None),
+                 inspect.Parameter("keep_raw_mesh", keyword, default=False)]
+    lines = ["Reconstructs the fluid surface of (N, 3) float32/float64 C-contiguous positions (read without a copy).",
+             "",
+             "attributes: per-particle arrays to carry onto the surface (float: interpolated; integer: from the",
+             "    nearest particle). keep_raw_mesh: also return the marching-cubes mesh as mesh.raw.",
+             "Raises ValueError naming a bad argument, MemoryError (with the estimate) beyond the memory budget.",
+             "",
+             "Parameters (the same as the command line's flags and the Blender add-on's properties):"]
+    for parameter in _parameters.PARAMETERS:
+        if parameter.name != "particle_radius":
+            signature.append(inspect.Parameter(parameter.name, keyword, default=parameter.python_default))
+        lines.append(f"  {parameter.name}: {parameter.describe()}")
+    reconstruct.__signature__ = inspect.Signature(signature)
+    reconstruct.__doc__ = "\n".join(lines)
+
+
+_document_reconstruct()
 
 
 def write_mesh(mesh: Mesh, path) -> None:

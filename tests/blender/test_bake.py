@@ -17,7 +17,7 @@ from _support import check, mesh_counts  # noqa: E402
 
 addon = _support.enable_addon()
 api, cache = addon.api, addon.cache
-bake, handlers, mesh_update = _support.addon_modules(addon, "blender.bake", "blender.handlers", "blender.mesh_update")
+bake, update, mesh_update = _support.addon_modules(addon, "blender.bake", "blender.update", "blender.mesh_update")
 
 BAKED = (28, 29, 30, 31)
 _temporary = tempfile.TemporaryDirectory(prefix="meniscus_bake_")
@@ -73,7 +73,7 @@ def test_bake_operator_writes_one_file_per_frame():
 
 
 def test_playback_comes_from_the_cache_and_matches_it():
-    render_arguments = handlers.reconstruction_arguments(surface.meniscus, for_render=True, normals=True)
+    render_arguments = update.reconstruction_arguments(surface.meniscus, for_render=True, normals=True)
     with _NoReconstruction():
         for frame in (30, 28, 31, 29, 30):  # scrubbing back and forth
             scene.frame_set(frame)
@@ -110,10 +110,10 @@ def test_turning_the_cache_off_reconstructs_again():
 
 
 def test_background_job_reports_progress_and_cancels():
-    frames = handlers.available_frames(surface)
+    frames = update.available_frames(surface)
     target = os.path.join(_temporary.name, "cancelled", "c_####.ply")
     tasks = [cache.BakeTask(f, frames[f], target.replace("####", f"{f:04d}")) for f in range(20, 26)]
-    arguments = handlers.reconstruction_arguments(surface.meniscus, for_render=True, normals=True)
+    arguments = update.reconstruction_arguments(surface.meniscus, for_render=True, normals=True)
     seen = []
 
     def cancel_after_first(job, task, result):
@@ -135,7 +135,7 @@ def test_broken_frame_is_skipped_not_fatal():
     good = os.path.join(_support.SAMPLE_DIR, "double_dam_break_0020.vtk")
     out = os.path.join(_temporary.name, "mixed", "m_{}.npz")
     tasks = [cache.BakeTask(1, broken, out.format(1)), cache.BakeTask(2, good, out.format(2))]
-    job = cache.BakeJob(tasks, handlers.reconstruction_arguments(surface.meniscus, True)).run()
+    job = cache.BakeJob(tasks, update.reconstruction_arguments(surface.meniscus, True)).run()
     check(list(job.failures) == [1] and job.completed == 2, job.failures)
     check(os.listdir(os.path.dirname(out)) == ["m_2.npz"], os.listdir(os.path.dirname(out)))
 

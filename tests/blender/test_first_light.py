@@ -16,7 +16,7 @@ import _support  # noqa: E402
 from _support import check, mesh_counts  # noqa: E402
 
 addon = _support.enable_addon()
-handlers, mesh_update = _support.addon_modules(addon, "blender.handlers", "blender.mesh_update")
+update, mesh_update = _support.addon_modules(addon, "blender.update", "blender.mesh_update")
 
 _support.clear_scene()
 scene = bpy.context.scene
@@ -202,7 +202,7 @@ def test_out_of_range_modes():
 def test_motion_blur_subframes_do_not_rebuild():
     scene.frame_set(30)
     status = surface.meniscus.status
-    check(not handlers.update_surface(surface, scene), "an unchanged frame must not be rebuilt")
+    check(not update.update_surface(surface, scene), "an unchanged frame must not be rebuilt")
     for frame, subframe in ((29, 0.75), (30, 0.25)):  # the shutter steps around frame 30
         scene.frame_set(frame, subframe=subframe)
         check(surface.meniscus.status == status, f"subframe {frame + subframe} rebuilt: {surface.meniscus.status}")

@@ -14,7 +14,7 @@ import _support  # noqa: E402
 from _support import check, mesh_counts  # noqa: E402
 
 addon = _support.enable_addon()
-handlers, mesh_update = _support.addon_modules(addon, "blender.handlers", "blender.mesh_update")
+update, mesh_update = _support.addon_modules(addon, "blender.update", "blender.mesh_update")
 
 RADIUS = 0.05
 _support.clear_scene()
@@ -78,9 +78,9 @@ def test_moving_the_source_moves_the_surface():
 
 def test_unchanged_source_and_subframes_do_not_rebuild():
     scene.frame_set(3)
-    check(not handlers.update_surface(surface, scene), "an unchanged source must not be rebuilt")
+    check(not update.update_surface(surface, scene), "an unchanged source must not be rebuilt")
     scene.frame_set(3, subframe=0.25)
-    check(not handlers.update_surface(surface, scene), "a shutter subframe must not rebuild a live source")
+    check(not update.update_surface(surface, scene), "a shutter subframe must not rebuild a live source")
     scene.frame_set(3)
 
 

@@ -16,7 +16,7 @@ from _support import check, mesh_counts  # noqa: E402
 
 addon = _support.enable_addon()
 api = addon.api
-handlers, mesh_update, panels = _support.addon_modules(addon, "blender.handlers", "blender.mesh_update", "blender.panels")
+update, mesh_update, panels = _support.addon_modules(addon, "blender.update", "blender.mesh_update", "blender.panels")
 
 _temporary = tempfile.TemporaryDirectory(prefix="meniscus_params_")
 _support.clear_scene()
@@ -29,44 +29,81 @@ settings.smoothing_iterations, settings.normal_smoothing_iterations = 2, 1
 settings.is_surface = True
 scene.frame_set(30)
 
-# Every keyword of api.reconstruct a user can set, and the property that drives it.
-PIPELINE_PROPERTIES = {
-    "particle_radius": "particle_radius", "smoothing_length": "smoothing_length", "cube_size": "cube_size",
-    "iso_threshold": "iso_threshold", "smoothing_iterations": "smoothing_iterations",
-    "smoothing_beta": "smoothing_strength", "smoothing_weights": "use_feature_weights",
-    "weights_normalization": "weights_normalization", "volume_restoration": "volume_restoration",
-    "decimate_barnacles": "decimate_barnacles", "mesh_cleanup": "mesh_cleanup",
-    "mesh_cleanup_snap_distance": "mesh_cleanup_snap_distance", "normal_smoothing_iterations":
-    "normal_smoothing_iterations", "sph_normals": "sph_normals", "output_weights": "output_weights",
-    "threads": "threads", "memory_budget": "memory_budget_mb", "normals": "use_custom_normals",
-}
-EXTRA_PROPERTIES = ("render_cube_size", "weights_normalization_auto", "use_snap_distance", "attribute_names",
-                    "source_type", "source_object", "use_cache", "cache_pattern", "cache_format")
+properties, render_state = _support.addon_modules(addon, "blender.properties", "blender.render_state")
+schema = addon.parameters
+ADDON_SETTINGS = ("render_cube_size", "use_custom_normals", "attribute_names", "source_type", "source_object",
+                  "use_cache", "cache_pattern", "cache_format")
 
 
-def test_every_parameter_is_a_property_with_a_tooltip():
+def test_every_schema_parameter_is_a_property_with_the_schemas_tooltip_and_default():
     rna = type(settings).bl_rna.properties
-    for name in list(PIPELINE_PROPERTIES.values()) + list(EXTRA_PROPERTIES):
-        check(name in rna, f"no property {name}")
-        description = rna[name].description
-        check(len(description) > 25 and description[0].isupper(), f"{name}: tooltip too thin: {description!r}")
-    arguments = handlers.reconstruction_arguments(settings, for_render=False)
-    check(set(arguments) == set(PIPELINE_PROPERTIES), set(arguments) ^ set(PIPELINE_PROPERTIES))
+    for parameter in schema.PARAMETERS:
+        if parameter.name in properties.DRIVEN_BY_ADDON:
+            continue
+        check(parameter.name in rna, f"no property for the parameter {parameter.name}")
+        prop = rna[parameter.name]
+        check(prop.name == parameter.label and prop.description.startswith(parameter.help),
+              f"{parameter.name}: {prop.name!r}, {prop.description!r}")
+        expected = parameter.suggested if parameter.required or parameter.automatic is not None else parameter.default
+        check(abs(float(prop.default) - expected) < 1e-6, f"{parameter.name}: default {prop.default}, schema {expected}")
+        if parameter.type != "flag":  # the UI cannot offer a value the core refuses
+            unbounded = prop.hard_max > 1e30  # the UI's way of saying "no maximum"
+            check(parameter.problem(prop.hard_min) is None and (unbounded or parameter.problem(prop.hard_max) is None),
+                  f"{parameter.name}: UI range {prop.hard_min}..{prop.hard_max}")
+        if parameter.automatic is not None:
+            check(parameter.name + "_auto" in rna, f"{parameter.name}: no automatic switch")
+    for name in ADDON_SETTINGS:
+        check(name in rna and len(rna[name].description) > 25, f"{name}: missing or thin tooltip")
+    arguments = update.reconstruction_arguments(settings, for_render=False)
+    check(set(arguments) == set(schema.BY_NAME), set(arguments) ^ set(schema.BY_NAME))
     check(arguments["cube_size"] == settings.cube_size, "viewport cube size")
-    check(handlers.reconstruction_arguments(settings, for_render=True)["cube_size"] == settings.render_cube_size,
+    check(update.reconstruction_arguments(settings, for_render=True)["cube_size"] == settings.render_cube_size,
           "render cube size")
+    check(arguments["weights_normalization"] == 0.0 and arguments["threads"] == 0, "automatic values")
     # The sub-panels group them; every one is registered under the main panel.
     for panel in panels.classes[1:]:
         check(getattr(bpy.types, panel.__name__, None) is not None, f"{panel.__name__} not registered")
         check(panel.bl_parent_id == "MENISCUS_PT_main", panel.__name__)
-    check(len(panels.classes) >= 7, "expected sub-panels for source, cache, surface, smoothing, mesh, normals, ...")
+    groups = {panel.group for panel in panels.classes if hasattr(panel, "group")}
+    check(set(schema.GROUPS) <= groups, f"groups without a panel: {set(schema.GROUPS) - groups}")
+
+
+def test_a_value_the_core_refuses_is_reported_with_the_panels_label():
+    settings["smoothing_strength"] = 0.0  # below the UI minimum: as a script or an old file could set it
+    update.update_surface(surface, scene, force=True)
+    status = settings.status
+    check(settings.status_is_error and status == "Smoothing Strength must be a number greater than 0 and at most 1, got 0",
+          status)
+    settings.smoothing_strength = 1.0
+    check(not settings.status_is_error, settings.status)
+
+
+def test_settings_of_older_files_are_converted():
+    legacy = _support.add_sample_sequence()
+    old = legacy.meniscus
+    old.is_surface = False
+    for key in list(old.keys()):
+        if key == "settings_version":
+            del old[key]
+    # As a file saved by 0.1 stores them: raw values under the old names.
+    old["use_feature_weights"] = 0
+    old["use_snap_distance"] = 1
+    old["memory_budget_mb"] = 2048
+    old["threads"] = 3
+    check(properties.migrate_settings(old), "nothing converted")
+    check(not old.smoothing_weights and not old.mesh_cleanup_snap_distance_auto, "flags")
+    check(not old.memory_budget_auto and abs(old.memory_budget - 2.0) < 1e-9, (old.memory_budget_auto, old.memory_budget))
+    check(not old.threads_auto and old.threads == 3, (old.threads_auto, old.threads))
+    check("use_feature_weights" not in old.keys() and old.settings_version == properties.SETTINGS_VERSION, old.keys())
+    check(not properties.migrate_settings(old), "a converted object must not be converted again")
+    bpy.data.objects.remove(legacy)
 
 
 def test_each_parameter_edit_reaches_the_core():
     scene.frame_set(30)
     baseline = mesh_update.read_vertices(surface.data).copy()
     changes = [("smoothing_length", 2.4), ("iso_threshold", 0.5), ("smoothing_iterations", 4),
-               ("smoothing_strength", 0.5), ("use_feature_weights", False), ("volume_restoration", False),
+               ("smoothing_strength", 0.5), ("smoothing_weights", False), ("volume_restoration", False),
                ("decimate_barnacles", False), ("mesh_cleanup", True), ("normal_smoothing_iterations", 3),
                ("sph_normals", True)]
     for name, value in changes:
@@ -81,11 +118,11 @@ def test_each_parameter_edit_reaches_the_core():
                   f"changing {name} did not change the surface")
         setattr(settings, name, old)
     settings.mesh_cleanup = True
-    settings.use_snap_distance = True
+    settings.mesh_cleanup_snap_distance_auto = False
     settings.mesh_cleanup_snap_distance = 0.1
     check(not settings.status_is_error, settings.status)
     settings.mesh_cleanup = False
-    settings.use_snap_distance = False
+    settings.mesh_cleanup_snap_distance_auto = True
     settings.weights_normalization_auto = False
     settings.weights_normalization = 30.0
     check(not settings.status_is_error and not np.array_equal(mesh_update.read_vertices(surface.data), baseline),
@@ -119,20 +156,21 @@ def test_weights_and_particle_attributes_become_mesh_attributes():
 
 def test_memory_budget_refusal_shows_in_the_status():
     meshes = len(bpy.data.meshes)
-    settings.memory_budget_mb = 1
+    settings.memory_budget_auto = False
+    settings.memory_budget = 1 / 1024  # 1 MiB
     settings.cube_size = 0.1  # the mistake the budget is for: ~50x more cells than the viewport needs
     status = settings.status
     check(settings.status_is_error and "memory budget" in status and "GiB" in status, status)
     check(mesh_counts(surface) == (0, 0), "a refused frame shows an empty mesh")
     print(f"     status: {status}")
     settings.cube_size = 2.0
-    settings.memory_budget_mb = 0
+    settings.memory_budget_auto = True
     check(not settings.status_is_error and mesh_counts(surface)[0] > 0, settings.status)
     check(len(bpy.data.meshes) == meshes, "no meshes may be left behind")
 
 
 def test_renders_use_the_render_cube_size():
-    render_arguments = handlers.reconstruction_arguments(settings, for_render=True)
+    render_arguments = update.reconstruction_arguments(settings, for_render=True)
     particles = api.read_particles(_support.SAMPLE_DIR / "double_dam_break_0030.vtk")
     expected = len(api.reconstruct(particles.positions, attributes={"velocity": particles.attributes["velocity"]},
                                    **render_arguments).triangles)
@@ -142,7 +180,7 @@ def test_renders_use_the_render_cube_size():
     seen = []
 
     def record(_scene, *_args):
-        seen.append((len(surface.data.polygons), handlers.is_rendering()))
+        seen.append((len(surface.data.polygons), render_state.is_rendering()))
 
     camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
     scene.collection.objects.link(camera)
@@ -163,7 +201,7 @@ def test_renders_use_the_render_cube_size():
         bpy.app.handlers.render_post.remove(record)
     check(seen[0] == (expected, True), f"still render used {seen[0]}, want ({expected}, True)")
     check(seen[1][1] and seen[1][0] > viewport, f"animation render used {seen[1]}")
-    check(not handlers.is_rendering(), "the render flag must be cleared after the render")
+    check(not render_state.is_rendering(), "the render flag must be cleared after the render")
     scene.frame_set(32)
     scene.frame_set(30)
     check(mesh_counts(surface)[1] == viewport, "after rendering, the viewport settings apply again")

@@ -96,7 +96,7 @@ PipelineResult reconstruct(const ParticleData& p, double cube = 0.5, std::size_t
     o.reconstruction.particle_radius = 0.025;
     o.reconstruction.cube_size = cube;
     o.execution.threads = 2;
-    o.execution.memory_budget_bytes = budget;
+    o.execution.memory_budget = static_cast<double>(budget) / (1024.0 * 1024.0 * 1024.0);  // the schema counts in GiB
     o.execution.skip_invalid = skip_invalid;
     return run_pipeline(PositionsView(p.positions.data(), p.size()), {}, o);
 }

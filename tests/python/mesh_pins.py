@@ -21,7 +21,7 @@ PINS = ROOT / "tests" / "data" / "mesh_pins.json"
 FRAMES = sorted(p.name for p in SHARED.glob("*") if p.suffix in (".vtk", ".bgeo"))
 
 FULL = dict(particle_radius=0.025, smoothing_length=2.0, cube_size=0.5, iso_threshold=0.6, mesh_cleanup=False,
-            decimate_barnacles=True, smoothing_iterations=25, smoothing_beta=1.0, smoothing_weights=True,
+            decimate_barnacles=True, smoothing_iterations=25, smoothing_strength=1.0, smoothing_weights=True,
             weights_normalization=0.0, volume_restoration=True, normals=True, normal_smoothing_iterations=10,
             sph_normals=False)
 CASES = {

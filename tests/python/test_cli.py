@@ -55,8 +55,18 @@ def test_sequence_with_missing_and_broken_frames_goes_on(cli, shared, tmp_path):
 
 
 def test_bad_parameters_and_missing_attribute_are_reported(cli, shared, tmp_path):
-    result = run(cli, "reconstruct", shared / "splashsurf/hilbert2_7954_particles.vtk", "-o", tmp_path / "x.ply", "-r", -1)
-    assert result.returncode != 0 and "particle_radius" in result.stderr
+    frame = shared / "splashsurf/hilbert2_7954_particles.vtk"
+    # Each value is refused naming the flag as the user typed it, with the allowed values and the value given.
+    result = run(cli, "reconstruct", frame, "-o", tmp_path / "x.ply", "-r", -1)
+    assert result.returncode == 2 and "--particle-radius: must be a number greater than 0, got -1" in result.stderr
+    result = run(cli, "reconstruct", frame, "-o", tmp_path / "x.ply", "-r", 0.025, "--mesh-smoothing-strength", 0)
+    assert result.returncode == 2 and "--mesh-smoothing-strength: must be a number greater than 0 and at most 1, got 0" in result.stderr
+    result = run(cli, "reconstruct", frame, "-o", tmp_path / "x.ply", "-r", 0.025, "--mesh-smoothing-iters", 2.5)
+    assert result.returncode == 2 and "must be a whole number at least 0, got 2.5" in result.stderr
+    result = run(cli, "reconstruct", frame, "-o", tmp_path / "x.ply", "-r", 0.025, "--normals", "maybe")
+    assert result.returncode == 2 and "--normals: takes on or off, got 'maybe'" in result.stderr
+    result = run(cli, "reconstruct", frame, "-o", tmp_path / "x.ply", "-r", 0.025, "--mesh-smoothing-weights-normalization", "x")
+    assert result.returncode == 2 and "takes a number greater than 0, or 0 for automatic (auto), got 'x'" in result.stderr
     result = run(cli, "reconstruct", shared / "splashsurf/hilbert2_7954_particles.vtk", "-o", tmp_path / "x.ply", "-r", 0.025,
                  "-a", "velocity")
     assert result.returncode != 0 and "no particle attribute 'velocity'" in result.stderr and "id" in result.stderr

@@ -90,7 +90,7 @@ def test_extension_zip_lists_one_wheel_per_blender_python():
     assert not any(n.endswith((".so", ".pyd", ".dylib")) for n in names), "compiled code only inside the wheels"
     # The add-on finds the library as the installed wheel (top-level `meniscus`), never by a path of its own.
     init = (ROOT / "addon" / "meniscus" / "__init__.py").read_text()
-    assert "from meniscus import api, cache, sequence" in init and "sys.path" not in init
+    assert "from meniscus import api, cache, parameters, sequence" in init and "sys.path" not in init
 
 
 def test_legacy_zip_is_one_add_on_folder_with_a_core_per_python():

@@ -157,8 +157,9 @@ def test_weights_are_zero_for_an_isolated_particle_and_one_inside_a_block():
 
 def test_sph_normals_are_unit_and_outward(shared):
     positions = meniscus.read_particles(shared / "splashsurf/bunny_frame_14_7705_particles.vtk").positions
-    geometric = meniscus.reconstruct(positions, 0.025, cube_size=1.0)
-    sph = meniscus.reconstruct(positions, 0.025, cube_size=1.0, sph_normals=True)
+    raw = dict(cube_size=1.0, decimate_barnacles=False, smoothing_iterations=0, normal_smoothing_iterations=0)
+    geometric = meniscus.reconstruct(positions, 0.025, **raw)
+    sph = meniscus.reconstruct(positions, 0.025, sph_normals=True, **raw)
     np.testing.assert_allclose(np.linalg.norm(sph.normals, axis=1), 1.0, atol=1e-4)
     agreement = np.einsum("ij,ij->i", sph.normals, geometric.normals)
     assert np.median(agreement) > 0.95   # the colour-field gradient points out of the fluid, like the faces
@@ -167,7 +168,7 @@ def test_sph_normals_are_unit_and_outward(shared):
 
 def test_mesh_cleanup_in_the_pipeline_keeps_the_mesh_valid_and_smaller(shared):
     positions = meniscus.read_particles(shared / "splashsurf/double_dam_break_frame_26_4732_particles.vtk").positions
-    plain = meniscus.reconstruct(positions, 0.025, cube_size=0.5)
+    plain = meniscus.reconstruct(positions, 0.025, cube_size=0.5, decimate_barnacles=False, smoothing_iterations=0)
     cleaned = reconstruct(positions, decimate_barnacles=False, mesh_cleanup=True)
     q, raw = meniscus.assess_quality(cleaned), meniscus.assess_quality(cleaned.raw)
     assert q["check"]["ok"], q["check"]["summary"]

@@ -1,12 +1,14 @@
 """The Blender side of Meniscus; the only part of the package that imports bpy.
 
-Laid out like Blender's own add-ons: properties (data), operators (actions), panels (UI), handlers (frame change),
-plus mesh_update (writing meshes, version differences) and material (the default water material).
+Laid out like Blender's own add-ons: properties (data, made from the parameter schema), operators and bake
+(actions), panels (UI), app_handlers (Blender's frame-change, render, load and undo hooks), update (rebuilding a
+surface for the current frame), surfaces (adding surface objects), render_state, sources (live objects), mesh_update
+(writing meshes: every Blender version difference) and material (the default water material).
 """
-from . import bake, handlers, operators, panels, properties
+from . import app_handlers, bake, operators, panels, properties
 
 # Registration order matters: panels and operators refer to the properties, handlers use all of them.
-_modules = (properties, operators, bake, panels, handlers)
+_modules = (properties, operators, bake, panels, app_handlers)
 _registered = False
 
 

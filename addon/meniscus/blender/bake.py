@@ -16,7 +16,7 @@ from bpy.props import BoolProperty, IntProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
 from .. import cache, sequence
-from . import handlers, material, operators
+from . import operators, surfaces, update
 
 # Running UI bakes by object name (names, not references: undo and file loads invalidate object references).
 _jobs = {}
@@ -34,7 +34,7 @@ def job_for(obj):
 def _cache_pattern_for_bake(obj):
     """The cache pattern the bake writes: the surface's (or the default), with the chosen format's extension."""
     settings = obj.meniscus
-    stored = handlers.cache_pattern_string(obj)
+    stored = update.cache_pattern_string(obj)
     if stored.startswith("//") and not bpy.data.is_saved:
         raise BakeError("Save the .blend first, or choose Cache Files: the cache goes next to the .blend")
     root, extension = os.path.splitext(stored)
@@ -50,14 +50,14 @@ def _cache_pattern_for_bake(obj):
 
 def prepare_bake(obj, frame_start=None, frame_end=None):
     """Reads everything the bake needs from Blender data (main thread only); returns (job, stored pattern)."""
-    if not handlers.is_surface(obj):
+    if not surfaces.is_surface(obj):
         raise BakeError(f"'{getattr(obj, 'name', obj)}' is not a Meniscus surface")
     settings = obj.meniscus
     if settings.source_type != "FILES":
         raise BakeError("Baking needs a particle file sequence as the source")
     try:
-        frames = handlers.available_frames(obj)
-    except handlers.SurfaceError as error:
+        frames = update.available_frames(obj)
+    except update.SurfaceError as error:
         raise BakeError(str(error)) from None
     first = settings.frame_start if frame_start is None else frame_start
     last = settings.frame_end if frame_end is None else frame_end
@@ -67,7 +67,10 @@ def prepare_bake(obj, frame_start=None, frame_end=None):
     if not tasks:
         raise BakeError(f"No particle files in frames {first}-{last}")
     # Bakes are for final output: render resolution, and normals always (playback may switch custom normals on).
-    arguments = handlers.reconstruction_arguments(settings, for_render=True, normals=True)
+    try:
+        arguments = update.reconstruction_arguments(settings, for_render=True, normals=True)
+    except update.SurfaceError as error:
+        raise BakeError(str(error)) from None
     wanted = cache.parse_attribute_names(settings.attribute_names)
     return cache.BakeJob(tasks, arguments, wanted), stored
 
@@ -81,9 +84,9 @@ def finish_bake(obj, job, stored_pattern, scene=None):
         settings.cache_pattern = stored_pattern
         settings.use_cache = True
         settings.is_surface = True
-    handlers.forget_cached_state()  # the cache folder changed under the listings
+    update.forget_cached_state()  # the cache folder changed under the listings
     if scene is not None:
-        handlers.update_surface(obj, scene, force=True)
+        update.update_surface(obj, scene, force=True)
     summary = f"Baked {written} of {job.total} frames in {job.seconds:.1f} s"
     if job.cancelled:
         summary += " (cancelled)"
@@ -181,7 +184,7 @@ class MENISCUS_OT_bake(bpy.types.Operator):
         window_manager.progress_end()
         _jobs.pop(self._name, None)
         obj = bpy.data.objects.get(self._name)  # looked up again: undo may have replaced the object meanwhile
-        if obj is None or not handlers.is_surface(obj):
+        if obj is None or not surfaces.is_surface(obj):
             self.report({"WARNING"}, "The baked surface no longer exists; the files are kept")
             return {"CANCELLED"}
         summary = finish_bake(obj, self._job, self._stored, context.scene)
@@ -234,24 +237,12 @@ class MENISCUS_OT_add_cache(bpy.types.Operator, ImportHelper):
             return {"CANCELLED"}
         pattern, frames, first, last = found
         stored = operators.stored_path(pattern.pattern_string(), self.relative_path)
-        name = pattern.prefix.rstrip("_-. ") or "Fluid Cache"
-        mesh = bpy.data.meshes.new(name)
-        obj = bpy.data.objects.new(name, mesh)
-        (context.collection or context.scene.collection).objects.link(obj)
-        material.assign_material(mesh, material.ensure_water_material())
-        settings = obj.meniscus
-        settings.cache_pattern = stored
-        settings.use_cache = True
-        settings.frame_start, settings.frame_end = first, last
-        settings.is_surface = True
-        context.scene.render.use_lock_interface = True  # the frame handler edits meshes during renders
-        handlers.ensure_registered()
-        handlers.update_surface(obj, context.scene, force=True)
-        for other in getattr(context, "selected_objects", ()):
-            other.select_set(False)
-        if context.view_layer.objects.get(obj.name) is not None:
-            obj.select_set(True)
-            context.view_layer.objects.active = obj
+        def configure(settings):
+            settings.cache_pattern = stored
+            settings.use_cache = True
+            settings.frame_start, settings.frame_end = first, last
+
+        obj = surfaces.add_surface_object(context, pattern.prefix.rstrip("_-. ") or "Fluid Cache", configure)
         self.report({"INFO"}, f"Added '{obj.name}': {len(frames)} cached frames ({first}-{last})")
         return {"FINISHED"}
 

@@ -6,7 +6,7 @@ from bpy.props import BoolProperty, FloatProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
 from .. import sequence
-from . import handlers, material
+from . import surfaces, update
 
 # The formats the core reads (each also gzip-compressed), for the file browser's filter.
 PARTICLE_FILE_GLOB = "*.vtk;*.vtu;*.vtp;*.bgeo;*.bhclassic;*.ply;*.npy;*.npz;*.csv;*.xyz;*.gz"
@@ -84,35 +84,19 @@ class MENISCUS_OT_add_sequence(bpy.types.Operator, ImportHelper):
         pattern, frames, first, last = found
 
         scene = context.scene
-        mesh = bpy.data.meshes.new(_object_name(pattern))
-        obj = bpy.data.objects.new(mesh.name, mesh)
-        collection = context.collection or scene.collection
-        collection.objects.link(obj)
-        material.assign_material(mesh, material.ensure_water_material())
+        stored = stored_path(pattern.pattern_string(), self.relative_path)
 
-        settings = obj.meniscus
-        # is_surface is set last: until then the parameter update callbacks do not trigger a rebuild per field.
-        settings.file_pattern = stored_path(pattern.pattern_string(), self.relative_path)
-        settings.particle_radius = self.particle_radius
-        settings.frame_start = first
-        settings.frame_end = last
-        settings.is_surface = True
+        def configure(settings):
+            settings.file_pattern = stored
+            settings.particle_radius = self.particle_radius
+            settings.frame_start = first
+            settings.frame_end = last
 
         if self.use_scene_frame_range:
             scene.frame_start, scene.frame_end = first, last
-        # The frame handler edits meshes while a render runs; locking the interface keeps the UI from reading them
-        # at the same time (a crash otherwise).
-        scene.render.use_lock_interface = True
-        handlers.ensure_registered()
-        handlers.update_surface(obj, scene, force=True)
-
-        for other in getattr(context, "selected_objects", ()):
-            other.select_set(False)
-        if context.view_layer.objects.get(obj.name) is not None:
-            obj.select_set(True)
-            context.view_layer.objects.active = obj
-
-        status = settings.status.replace(handlers.STATUS_LINE_SEPARATOR, ", ")
+        obj = surfaces.add_surface_object(context, _object_name(pattern), configure)
+        settings = obj.meniscus
+        status = settings.status.replace(surfaces.STATUS_LINE_SEPARATOR, ", ")
         self.report({"INFO"}, f"Added '{obj.name}': {len(frames)} frames ({first}-{last}). {status}")
         return {"FINISHED"}
 
@@ -130,17 +114,17 @@ class MENISCUS_OT_reload(bpy.types.Operator):
     )
 
     def execute(self, context):
-        handlers.forget_cached_state()
+        update.forget_cached_state()
         scene = context.scene
         if self.all_surfaces:
-            targets = handlers.surface_objects(scene)
+            targets = surfaces.surface_objects(scene)
         else:
-            targets = [obj for obj in context.selected_objects if handlers.is_surface(obj)]
+            targets = [obj for obj in context.selected_objects if surfaces.is_surface(obj)]
             active = context.active_object
-            if handlers.is_surface(active) and active not in targets:
+            if surfaces.is_surface(active) and active not in targets:
                 targets.append(active)
         for obj in targets:
-            handlers.update_surface(obj, scene, force=True)
+            update.update_surface(obj, scene, force=True)
         self.report({"INFO"}, f"Reloaded {len(targets)} surface(s)")
         return {"FINISHED"}
 
@@ -153,13 +137,13 @@ class MENISCUS_OT_detect_frame_range(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return handlers.is_surface(context.active_object)
+        return surfaces.is_surface(context.active_object)
 
     def execute(self, context):
         obj = context.active_object
         try:
-            frames = handlers.available_frames(obj)
-        except handlers.SurfaceError as error:
+            frames = update.available_frames(obj)
+        except update.SurfaceError as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         found = sequence.frame_range(frames)
@@ -171,7 +155,7 @@ class MENISCUS_OT_detect_frame_range(bpy.types.Operator):
         settings.is_surface = False
         settings.frame_start, settings.frame_end = found
         settings.is_surface = True
-        handlers.update_surface(obj, context.scene)
+        update.update_surface(obj, context.scene)
         self.report({"INFO"}, f"Frames {found[0]}-{found[1]} ({len(frames)} files)")
         return {"FINISHED"}
 
@@ -193,31 +177,19 @@ class MENISCUS_OT_add_object_surface(bpy.types.Operator):
     @classmethod
     def poll(cls, context):
         obj = context.active_object
-        return obj is not None and obj.type in {"MESH", "POINTCLOUD"} and not handlers.is_surface(obj)
+        return obj is not None and obj.type in {"MESH", "POINTCLOUD"} and not surfaces.is_surface(obj)
 
     def execute(self, context):
         source = bpy.data.objects.get(self.source_name) if self.source_name else context.active_object
         if source is None or source.type not in {"MESH", "POINTCLOUD"}:
             self.report({"ERROR"}, "Choose a mesh or point cloud object (particle systems live on meshes)")
             return {"CANCELLED"}
-        scene = context.scene
-        mesh = bpy.data.meshes.new(f"{source.name} Surface")
-        obj = bpy.data.objects.new(mesh.name, mesh)
-        (context.collection or scene.collection).objects.link(obj)
-        material.assign_material(mesh, material.ensure_water_material())
-        settings = obj.meniscus
-        settings.source_type = "OBJECT"
-        settings.source_object = source
-        settings.particle_radius = self.particle_radius
-        settings.is_surface = True
-        scene.render.use_lock_interface = True  # as for file sequences: the handler edits meshes during renders
-        handlers.ensure_registered()
-        handlers.update_surface(obj, scene, force=True)
-        for other in getattr(context, "selected_objects", ()):
-            other.select_set(False)
-        if context.view_layer.objects.get(obj.name) is not None:
-            obj.select_set(True)
-            context.view_layer.objects.active = obj
+        def configure(settings):
+            settings.source_type = "OBJECT"
+            settings.source_object = source
+            settings.particle_radius = self.particle_radius
+
+        obj = surfaces.add_surface_object(context, f"{source.name} Surface", configure)
         self.report({"INFO"}, f"Added '{obj.name}'")
         return {"FINISHED"}
 

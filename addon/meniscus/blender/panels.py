@@ -3,8 +3,8 @@ import textwrap
 
 import bpy
 
-from .. import sequence
-from . import bake, handlers
+from .. import parameters, sequence
+from . import bake, properties, surfaces, update
 
 
 def _wrap_lines(text, context):
@@ -14,7 +14,7 @@ def _wrap_lines(text, context):
     pixels = (region.width if region else 300) / max(context.preferences.system.ui_scale, 0.1)
     width = max(16, int((pixels - 60) / 8))
     lines = []
-    for line in text.split(handlers.STATUS_LINE_SEPARATOR):
+    for line in text.split(surfaces.STATUS_LINE_SEPARATOR):
         lines.extend(textwrap.wrap(line, width) or [""])
     return lines
 
@@ -31,7 +31,7 @@ class _SurfacePanel(_SidebarPanel):
 
     @classmethod
     def poll(cls, context):
-        return handlers.is_surface(context.active_object)
+        return surfaces.is_surface(context.active_object)
 
 
 class MENISCUS_PT_main(_SidebarPanel, bpy.types.Panel):
@@ -44,7 +44,7 @@ class MENISCUS_PT_main(_SidebarPanel, bpy.types.Panel):
         row.operator("meniscus.add_cache", text="Add Cache", icon="FILE_CACHE")
         layout.operator("meniscus.add_object_surface", icon="PARTICLES")
         obj = context.active_object
-        if not handlers.is_surface(obj):
+        if not surfaces.is_surface(obj):
             layout.label(text="Select a surface to edit it")
             return
         settings = obj.meniscus
@@ -58,7 +58,7 @@ class MENISCUS_PT_main(_SidebarPanel, bpy.types.Panel):
         column = box.column(align=True)
         text = settings.status or "Not built yet"
         # Errors are wrapped so that the whole message (often a path) can be read; the normal status has short lines.
-        lines = _wrap_lines(text, context) if settings.status_is_error else text.split(handlers.STATUS_LINE_SEPARATOR)
+        lines = _wrap_lines(text, context) if settings.status_is_error else text.split(surfaces.STATUS_LINE_SEPARATOR)
         for index, line in enumerate(lines):
             icon = ("ERROR" if settings.status_is_error else "INFO") if index == 0 else "BLANK1"
             column.label(text=line, icon=icon)
@@ -92,7 +92,7 @@ class MENISCUS_PT_source(_SurfacePanel, bpy.types.Panel):
 
         # Cheap to draw: the listing is cached and only re-read when the folder changes.
         try:
-            frames = handlers.available_frames(obj)
+            frames = update.available_frames(obj)
         except Exception:
             frames = {}
         found = sequence.frame_range(frames)
@@ -112,7 +112,7 @@ class MENISCUS_PT_cache(_SurfacePanel, bpy.types.Panel):
         settings = obj.meniscus
         layout.prop(settings, "cache_pattern", text="Cache")
         if not settings.cache_pattern:
-            layout.label(text="Default: " + handlers.cache_pattern_string(obj), icon="BLANK1")
+            layout.label(text="Default: " + update.cache_pattern_string(obj), icon="BLANK1")
         layout.prop(settings, "cache_format", text="Format")
         job = bake.job_for(obj)
         if job is not None:
@@ -129,92 +129,95 @@ class MENISCUS_PT_cache(_SurfacePanel, bpy.types.Panel):
         layout.prop(settings, "use_cache")
 
 
-class MENISCUS_PT_reconstruction(_SurfacePanel, bpy.types.Panel):
-    bl_label = "Surface"
+def _is_on(settings, name):
+    """Whether a flag or count parameter is on (non-zero): a dependent parameter only matters then."""
+    if name == "normals":
+        return settings.use_custom_normals
+    return bool(getattr(settings, name))
+
+
+def draw_parameters(layout, settings, group):
+    """Every schema parameter of a group, in schema order: greyed out while the parameter it depends on is off, and
+    with its Automatic switch where it has one. A parameter added to the schema appears here by itself."""
+    for parameter in parameters.PARAMETERS:
+        if parameter.group != group or parameter.name in properties.DRIVEN_BY_ADDON:
+            continue
+        column = layout.column(align=True)
+        column.active = not parameter.depends_on or _is_on(settings, parameter.depends_on)
+        if parameter.automatic is not None:
+            # [Neighbour Count 5.00][Auto]: the value greys out while the switch is on.
+            row = column.row(align=True)
+            value = row.row(align=True)
+            value.active = not getattr(settings, parameter.name + "_auto")
+            value.prop(settings, parameter.name)
+            row.prop(settings, parameter.name + "_auto", text="Auto", toggle=True)
+        else:
+            column.prop(settings, parameter.name)
+
+
+class _ParameterPanel(_SurfacePanel):
+    """A sub-panel for one group of the parameter schema, plus the add-on's own settings that belong there."""
+    group = ""
 
     def draw(self, context):
-        layout = self.layout
         settings = context.active_object.meniscus
-        layout.prop(settings, "particle_radius")
-        layout.prop(settings, "smoothing_length")
+        self.draw_before(self.layout, settings)
+        draw_parameters(self.layout, settings, self.group)
+        self.draw_after(self.layout, settings)
+
+    def draw_before(self, layout, settings):
+        pass
+
+    def draw_after(self, layout, settings):
+        pass
+
+
+class MENISCUS_PT_reconstruction(_ParameterPanel, bpy.types.Panel):
+    bl_label = "Surface"
+    group = "surface"
+
+    def draw_after(self, layout, settings):
         col = layout.column(align=True)
         col.prop(settings, "cube_size")
-        col.prop(settings, "render_cube_size")
-        layout.prop(settings, "iso_threshold")
+        col.prop(settings, properties.RENDER_CUBE_SIZE)
 
 
-class MENISCUS_PT_smoothing(_SurfacePanel, bpy.types.Panel):
+class MENISCUS_PT_smoothing(_ParameterPanel, bpy.types.Panel):
     bl_label = "Smoothing"
-
-    def draw(self, context):
-        layout = self.layout
-        settings = context.active_object.meniscus
-        layout.prop(settings, "smoothing_iterations")
-        col = layout.column()
-        col.active = settings.smoothing_iterations > 0
-        col.prop(settings, "smoothing_strength")
-        col.prop(settings, "use_feature_weights")
-        sub = col.column()
-        sub.active = settings.use_feature_weights or settings.output_weights
-        sub.prop(settings, "weights_normalization_auto")
-        row = sub.row()
-        row.active = not settings.weights_normalization_auto
-        row.prop(settings, "weights_normalization")
-        col.prop(settings, "volume_restoration")
+    group = "smoothing"
 
 
-class MENISCUS_PT_mesh(_SurfacePanel, bpy.types.Panel):
+class MENISCUS_PT_mesh(_ParameterPanel, bpy.types.Panel):
     bl_label = "Mesh Cleanup"
     bl_options = {"DEFAULT_CLOSED"}
-
-    def draw(self, context):
-        layout = self.layout
-        settings = context.active_object.meniscus
-        layout.prop(settings, "decimate_barnacles")
-        layout.prop(settings, "mesh_cleanup")
-        col = layout.column()
-        col.active = settings.mesh_cleanup
-        col.prop(settings, "use_snap_distance")
-        row = col.row()
-        row.active = settings.use_snap_distance
-        row.prop(settings, "mesh_cleanup_snap_distance")
+    group = "mesh"
 
 
-class MENISCUS_PT_normals(_SurfacePanel, bpy.types.Panel):
+class MENISCUS_PT_normals(_ParameterPanel, bpy.types.Panel):
     bl_label = "Normals"
     bl_options = {"DEFAULT_CLOSED"}
+    group = "normals"
 
-    def draw(self, context):
-        layout = self.layout
-        settings = context.active_object.meniscus
+    def draw_before(self, layout, settings):
         layout.prop(settings, "use_custom_normals")
-        col = layout.column()
-        col.active = settings.use_custom_normals
-        col.prop(settings, "normal_smoothing_iterations")
-        col.prop(settings, "sph_normals")
 
 
-class MENISCUS_PT_attributes(_SurfacePanel, bpy.types.Panel):
+class MENISCUS_PT_attributes(_ParameterPanel, bpy.types.Panel):
     bl_label = "Attributes"
     bl_options = {"DEFAULT_CLOSED"}
+    group = "output"
 
-    def draw(self, context):
-        layout = self.layout
-        settings = context.active_object.meniscus
-        layout.prop(settings, "output_weights")
+    def draw_after(self, layout, settings):
         layout.prop(settings, "attribute_names")
         layout.label(text="Read them with an Attribute node", icon="NODE")
 
 
-class MENISCUS_PT_performance(_SurfacePanel, bpy.types.Panel):
+class MENISCUS_PT_performance(_ParameterPanel, bpy.types.Panel):
     bl_label = "Performance"
     bl_options = {"DEFAULT_CLOSED"}
+    group = "execution"
 
-    def draw(self, context):
-        layout = self.layout
-        settings = context.active_object.meniscus
-        layout.prop(settings, "threads")
-        layout.prop(settings, "memory_budget_mb")
+    def draw_after(self, layout, settings):
         layout.prop(settings, "use_custom_normals", text="Custom Normals (slower playback)")
 
 

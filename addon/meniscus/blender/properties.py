@@ -1,25 +1,36 @@
 """Per-object settings of a Meniscus surface: `Object.meniscus`.
 
 Every object that carries `meniscus.is_surface = True` owns one Mesh that the frame handler rebuilds from the
-particle file of the current frame. The reconstruction parameters use splashsurf's names and conventions
-(lengths other than the radius are multiples of it) so that values carry over between the two tools.
+particle file of the current frame. The pipeline's parameters are made from the core's parameter schema (one
+property per parameter, same name, label, tooltip, range and default as the API and the command line; a parameter
+with an automatic value gets a `<name>_auto` switch beside it); the rest are the add-on's own: where particles come
+from, the cache, the viewport cube size, custom normals, which attributes to carry.
 """
+import sys
+
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
-from .. import cache, sequence
+from .. import cache, parameters, sequence
+
+# The layout of the settings, stored in each surface; files saved before the schema (0) are converted on load.
+SETTINGS_VERSION = 2
+# Pipeline parameters the add-on sets itself: normals follow "Custom Normals", cube_size has a viewport and a
+# render value (`cube_size` and `render_cube_size`, the names .blend files already have).
+DRIVEN_BY_ADDON = {"normals", "cube_size"}
+RENDER_CUBE_SIZE = "render_cube_size"
 
 
 def _rebuild_after_edit(settings, context):
     # Editing a parameter in the UI should show its effect at once, not at the next frame change. The import is
-    # local because handlers imports this module (for the settings' type) and the cycle is harmless only at call time.
-    from . import handlers
+    # local because the updater imports this module (for the settings' type); the cycle is harmless at call time.
+    from . import update
 
     if not settings.is_surface:  # the add operator fills many fields before it turns the object into a surface
         return
     scene = getattr(context, "scene", None) or bpy.context.scene
     if scene is not None:
-        handlers.update_surface(settings.id_data, scene)
+        update.update_surface(settings.id_data, scene)
 
 
 _OUT_OF_RANGE_ITEMS = [
@@ -131,161 +142,20 @@ class MeniscusSurfaceSettings(bpy.types.PropertyGroup):
         options=set(),
     )
 
-    # Reconstruction ----------------------------------------------------------------------------------------------
-    particle_radius: FloatProperty(
-        name="Particle Radius",
-        description="Radius of one particle, in scene units. The other lengths are multiples of it",
-        default=0.025, min=1e-6, soft_min=1e-4, soft_max=1.0, precision=4, step=0.1,
-        subtype="DISTANCE", unit="LENGTH",
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-    smoothing_length: FloatProperty(
-        name="Smoothing Length",
-        description="How far each particle's influence reaches, in particle radii (it reaches 2 x this x radius). "
-                    "Larger: blobbier, fewer holes; smaller: more detail, more holes",
-        default=2.0, min=0.1, soft_min=1.0, soft_max=4.0, precision=2,
-        options=set(),
-        update=_rebuild_after_edit,
-    )
+    # Add-on settings of the pipeline (the pipeline's own parameters are added from the schema below) ------------
     cube_size: FloatProperty(
         name="Viewport Cube Size",
-        description="Size of the surface's cells in the viewport, in particle radii. Larger is coarser and faster; "
-                    "keep it large for scrubbing",
-        default=1.0, min=0.05, soft_min=0.2, soft_max=3.0, precision=2,
+        description="Cube size in the viewport, in particle radii: larger is coarser and faster, for scrubbing (renders "
+                    "and bakes use Render Cube Size)",
+        default=1.0, min=0.01, soft_min=0.2, soft_max=3.0, precision=2,
         options=set(),
         update=_rebuild_after_edit,
     )
-    render_cube_size: FloatProperty(
-        name="Render Cube Size",
-        description="Size of the surface's cells in renders and bakes, in particle radii. Smaller gives a finer "
-                    "surface and more triangles (halving it means about four times as many)",
-        default=0.5, min=0.05, soft_min=0.2, soft_max=3.0, precision=2,
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-    iso_threshold: FloatProperty(
-        name="Iso Threshold",
-        description="Where the surface lies, as a fraction of the fluid's density: higher pulls the surface in "
-                    "(thinner splashes), lower pushes it out (fuller, more merged drops)",
-        default=0.6, min=0.01, max=5.0, soft_max=1.5, precision=2,
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-
-    # Smoothing ---------------------------------------------------------------------------------------------------
-    smoothing_iterations: IntProperty(
-        name="Smoothing Iterations",
-        description="How many times the surface is smoothed: removes the bumps of individual particles. "
-                    "0 turns smoothing off; 25 is a good start",
-        default=25, min=0, soft_max=100,
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-    smoothing_strength: FloatProperty(
-        name="Smoothing Strength",
-        description="How far each smoothing step moves a vertex towards its neighbours (1: all the way)",
-        default=1.0, min=0.0, max=1.0, precision=2,
-        subtype="FACTOR",
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-    use_feature_weights: BoolProperty(
-        name="Keep Splashes",
-        description="Smooth flat water fully but thin splashes and drops less, so they keep their shape "
-                    "(feature weights from the particle neighbourhood)",
-        default=True,
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-    weights_normalization_auto: BoolProperty(
-        name="Automatic Normalisation",
-        description="Measure how many neighbours a particle at a flat surface has, per frame, instead of using "
-                    "a fixed number",
-        default=True,
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-    weights_normalization: FloatProperty(
-        name="Neighbour Count",
-        description="Distance-weighted neighbour count expected at a flat surface: places with fewer neighbours are "
-                    "treated as splash and smoothed less. About 5 suits SPH data at rest density with the default "
-                    "smoothing length (splashsurf's 13 counts neighbours differently and does not apply here)",
-        default=5.0, min=0.1, soft_min=1.0, soft_max=20.0, precision=2,
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-    volume_restoration: BoolProperty(
-        name="Keep Volume",
-        description="Push the smoothed surface back out so that smoothing does not shrink the water",
-        default=True,
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-
-    # Mesh --------------------------------------------------------------------------------------------------------
-    decimate_barnacles: BoolProperty(
-        name="Remove Barnacles",
-        description="Collapse the small bumps (\"barnacles\") that marching cubes leaves on flat water",
-        default=True,
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-    mesh_cleanup: BoolProperty(
-        name="Mesh Cleanup",
-        description="Merge the tiny, thin triangles that marching cubes makes: fewer triangles, better shading",
-        default=False,
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-    use_snap_distance: BoolProperty(
-        name="Limit Snapping",
-        description="Clean up only vertices close to a grid point (otherwise every vertex may be merged)",
-        default=False,
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-    mesh_cleanup_snap_distance: FloatProperty(
-        name="Snap Distance",
-        description="How close to a grid point a vertex must be to be merged, as a fraction of the cube size",
-        default=0.5, min=0.0, max=1.0, precision=2,
-        subtype="FACTOR",
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-
-    # Normals -----------------------------------------------------------------------------------------------------
     use_custom_normals: BoolProperty(
         name="Custom Normals",
         description="Shade with the reconstructed (smoothed) normals instead of Blender's own. Costs time at "
                     "every frame change on large meshes; when off, Blender's smooth shading is used",
         default=True,
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-    normal_smoothing_iterations: IntProperty(
-        name="Normal Smoothing",
-        description="How many times the normals are averaged with their neighbours: softer shading, fewer "
-                    "visible facets (0: off)",
-        default=10, min=0, soft_max=50,
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-    sph_normals: BoolProperty(
-        name="Particle Normals",
-        description="Take normals from the particles' density gradient instead of the mesh: smoother on coarse "
-                    "meshes, slower",
-        default=False,
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-
-    # Attributes --------------------------------------------------------------------------------------------------
-    output_weights: BoolProperty(
-        name="Weights Attribute",
-        description="Store the feature weights as the point attribute 'weights' (0 in splashes, 1 in calm water), "
-                    "e.g. to shade foam with an Attribute node",
-        default=False,
         options=set(),
         update=_rebuild_after_edit,
     )
@@ -299,22 +169,11 @@ class MeniscusSurfaceSettings(bpy.types.PropertyGroup):
         options=set(),
         update=_rebuild_after_edit,
     )
-
-    # Performance -------------------------------------------------------------------------------------------------
-    threads: IntProperty(
-        name="Threads",
-        description="CPU threads the reconstruction uses (0: all)",
-        default=0, min=0, soft_max=64,
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-    memory_budget_mb: IntProperty(
-        name="Memory Limit (MB)",
-        description="Refuse a frame that would need more memory than this, instead of exhausting the machine "
-                    "(e.g. after typing a much too small cube size). 0: a share of the installed memory",
-        default=0, min=0, soft_max=65536,
-        options=set(),
-        update=_rebuild_after_edit,
+    settings_version: IntProperty(
+        name="Settings Version",
+        description="Layout of these settings when they were last saved (older files are converted on load)",
+        default=0,
+        options={"HIDDEN"},
     )
 
     # Feedback (written by the frame handler) ---------------------------------------------------------------------
@@ -329,6 +188,125 @@ class MeniscusSurfaceSettings(bpy.types.PropertyGroup):
         default=False,
         options=set(),
     )
+
+
+# Pipeline parameters as properties ------------------------------------------------------------------------------
+
+def _tooltip(parameter):
+    unit = f" (in {parameter.unit})" if parameter.unit else ""
+    return f"{parameter.help}{unit}"
+
+
+def _ui_minimum(parameter, precision):
+    # Blender's minimum is inclusive: an open bound starts one displayed step above it, so the UI offers no value
+    # that the core refuses.
+    return parameter.minimum + (10.0 ** -precision if parameter.minimum_open else 0.0)
+
+
+def parameter_property(parameter, default=None, name=None, description=None):
+    """The bpy property of a schema parameter (default: the schema's, or its suggested value where that is
+    automatic or required)."""
+    value = parameter.suggested if default is None else default
+    common = dict(name=name or parameter.label, description=description or _tooltip(parameter), options=set(),
+                  update=_rebuild_after_edit)
+    if parameter.type == "flag":
+        return BoolProperty(default=bool(value), **common)
+    if parameter.type == "count":
+        return IntProperty(default=int(value), min=int(parameter.minimum), max=int(min(parameter.maximum, 2 ** 31 - 1)),
+                           soft_min=int(parameter.soft_minimum), soft_max=int(parameter.soft_maximum), **common)
+    precision = 4 if parameter.unit == "scene units" else 2
+    extra = {}
+    if parameter.unit == "scene units":
+        extra = dict(subtype="DISTANCE", unit="LENGTH", step=0.1)
+    elif parameter.minimum >= 0.0 and parameter.maximum <= 1.0:
+        extra = dict(subtype="FACTOR")
+    maximum = parameter.maximum if parameter.maximum < sys.float_info.max else sys.float_info.max
+    return FloatProperty(default=float(value), min=_ui_minimum(parameter, precision), max=maximum,
+                         soft_min=max(parameter.soft_minimum, _ui_minimum(parameter, precision)),
+                         soft_max=parameter.soft_maximum, precision=precision, **common, **extra)
+
+
+def _add_pipeline_properties(cls):
+    """One property per schema parameter (and a <name>_auto switch where it has an automatic value)."""
+    for parameter in parameters.PARAMETERS:
+        if parameter.name in DRIVEN_BY_ADDON:
+            continue
+        cls.__annotations__[parameter.name] = parameter_property(parameter)
+        if parameter.automatic is not None:
+            cls.__annotations__[parameter.name + "_auto"] = BoolProperty(
+                name="Automatic", default=parameter.default == parameter.automatic, options=set(),
+                description=f"Choose {parameter.label} automatically ({parameter.automatic_word}) instead of the value "
+                            "beside it", update=_rebuild_after_edit)
+    cube = parameters.BY_NAME["cube_size"]
+    cls.__annotations__[RENDER_CUBE_SIZE] = parameter_property(
+        cube, default=cube.default, name="Render Cube Size",
+        description=_tooltip(cube) + ". Used for renders and bakes; the viewport uses Viewport Cube Size")
+
+
+_add_pipeline_properties(MeniscusSurfaceSettings)
+
+
+def pipeline_arguments(settings, for_render, normals=None):
+    """api.reconstruct's keyword arguments from a surface's settings: every schema parameter, automatic ones at
+    their automatic value when switched so, the render or the viewport cube size, normals when custom normals are on
+    (or as given)."""
+    arguments = {}
+    for parameter in parameters.PARAMETERS:
+        if parameter.name in DRIVEN_BY_ADDON:
+            continue
+        value = getattr(settings, parameter.name)
+        if parameter.automatic is not None and getattr(settings, parameter.name + "_auto"):
+            value = parameters.convert(parameter, parameter.automatic)
+        arguments[parameter.name] = value
+    arguments["cube_size"] = getattr(settings, RENDER_CUBE_SIZE) if for_render else settings.cube_size
+    arguments["normals"] = settings.use_custom_normals if normals is None else normals
+    return arguments
+
+
+def label_of(name, for_render=True):
+    """The label under which the panel shows a pipeline parameter."""
+    if name == "cube_size":
+        return "Render Cube Size" if for_render else "Viewport Cube Size"
+    if name == "normals":
+        return "Custom Normals"
+    return parameters.BY_NAME[name].label
+
+
+def argument_problems(arguments, for_render=True):
+    """What is wrong with the arguments, in the panel's words ('Smoothing Strength must be a number greater than 0
+    and at most 1, got 0'): the add-on checks before the core is called, so a user never sees an internal name."""
+    problems = []
+    for name, value in arguments.items():
+        problem = parameters.BY_NAME[name].problem(value)
+        if problem:
+            problems.append(f"{label_of(name, for_render)} {problem}")
+    return problems
+
+
+# Settings of files saved before the schema (layout 0) -------------------------------------------------------------
+
+def migrate_settings(settings):
+    """Converts a surface's settings from an older layout (renamed or re-expressed properties) in place, keeping
+    every value the user set; returns True when something was converted. Older files store their values as raw ID
+    properties under the old names, which Blender keeps even though no property of that name exists any more."""
+    if settings.get("settings_version", 0) >= SETTINGS_VERSION:
+        return False
+    if "use_feature_weights" in settings:
+        settings.smoothing_weights = bool(settings["use_feature_weights"])
+    if "use_snap_distance" in settings:
+        settings.mesh_cleanup_snap_distance_auto = not settings["use_snap_distance"]
+    if "memory_budget_mb" in settings:
+        megabytes = int(settings["memory_budget_mb"])
+        settings.memory_budget_auto = megabytes == 0
+        if megabytes > 0:
+            settings.memory_budget = megabytes / 1024.0
+    if "threads" in settings and int(settings["threads"]) > 0:
+        settings.threads_auto = False
+    for old in ("use_feature_weights", "use_snap_distance", "memory_budget_mb"):
+        if old in settings:
+            del settings[old]
+    settings.settings_version = SETTINGS_VERSION
+    return True
 
 
 classes = (MeniscusSurfaceSettings,)

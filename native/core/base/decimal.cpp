@@ -31,6 +31,8 @@ DecimalResult parse_decimal(const char* first, const char* last, float& out) {
 
 char* format_decimal(char* first, float value) { return std::to_chars(first, first + 32, value).ptr; }
 
+char* format_decimal(char* first, double value) { return std::to_chars(first, first + 32, value).ptr; }
+
 #else
 
 namespace {
@@ -89,6 +91,15 @@ char* format_decimal(char* first, float value) {
     for (int digits = 6; digits <= 9; ++digits) {
         const int n = std::snprintf(first, 32, "%.*g", digits, static_cast<double>(value));
         if (std::strtof(first, nullptr) == value || digits == 9 || value != value) return first + n;
+    }
+    return first;
+}
+
+char* format_decimal(char* first, double value) {
+    CLocaleScope c_locale;
+    for (int digits = 15; digits <= 17; ++digits) {
+        const int n = std::snprintf(first, 32, "%.*g", digits, value);
+        if (std::strtod(first, nullptr) == value || digits == 17 || value != value) return first + n;
     }
     return first;
 }

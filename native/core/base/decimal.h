@@ -21,5 +21,7 @@ DecimalResult parse_decimal(const char* first, const char* last, float& out);
 // The shortest text that reads back as the same float (at most 9 significant digits where the library has no
 // shortest formatting); writes at most 32 characters and returns one past the last.
 char* format_decimal(char* first, float value);
+// The same for a double (at most 17 significant digits without shortest formatting).
+char* format_decimal(char* first, double value);
 
 }  // namespace meniscus

@@ -5,7 +5,7 @@
 #pragma once
 #include <vector>
 
-#include "params.h"
+#include "parameters.h"
 #include "surface/reconstruction.h"
 
 namespace meniscus {

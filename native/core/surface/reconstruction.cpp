@@ -39,12 +39,6 @@ bool coords_less(const Coords& a, const Coords& b) {
     return a[0] < b[0];
 }
 
-std::string number(double x) {
-    char buffer[64];
-    std::snprintf(buffer, sizeof buffer, "%g", x);
-    return buffer;
-}
-
 // A brick's piece of the mesh. Vertices live on grid edges and belong to the brick holding the edge's start
 // point; triangles of this brick that use an edge starting in a neighbouring brick refer to it as "foreign".
 struct BrickMesh {
@@ -444,20 +438,6 @@ double estimate_mesh_bytes(const ParticleGrid& grid, double cube_edge, std::size
 
 }  // namespace
 
-void validate(const ReconstructionParams& p) {
-    auto require = [](bool ok, const std::string& message) {
-        if (!ok) throw InputError(message);
-    };
-    require(std::isfinite(p.particle_radius) && p.particle_radius > 0.0,
-            "particle_radius must be a positive finite number, got " + number(p.particle_radius));
-    require(std::isfinite(p.smoothing_length) && p.smoothing_length > 0.0,
-            "smoothing_length must be a positive finite number (a multiple of the particle radius), got " + number(p.smoothing_length));
-    require(std::isfinite(p.cube_size) && p.cube_size > 0.0,
-            "cube_size must be a positive finite number (a multiple of the particle radius), got " + number(p.cube_size));
-    require(std::isfinite(p.iso_threshold) && p.iso_threshold > 0.0,
-            "iso_threshold must be a positive finite number, got " + number(p.iso_threshold));
-}
-
 SurfaceReconstruction reconstruct_surface(const PositionsView& positions, const ReconstructionParams& params,
                                           const ExecutionOptions& execution, PipelineStats* stats) {
     validate(params);
@@ -489,8 +469,8 @@ SurfaceReconstruction reconstruct_surface(const PositionsView& positions, const 
 
     std::size_t estimated_triangles = 0;
     const double estimate = estimate_mesh_bytes(r.grid, cube, &estimated_triangles);
-    check_memory_budget(estimate, execution.memory_budget_bytes,
-                        "the surface mesh at cube size " + number(params.cube_size) + " r (about " + std::to_string(estimated_triangles) +
+    check_memory_budget(estimate, execution.memory_budget_bytes(),
+                        "the surface mesh at cube size " + format_number(params.cube_size) + " r (about " + std::to_string(estimated_triangles) +
                             " triangles)");
 
     CubicSplineKernel kernel(support);

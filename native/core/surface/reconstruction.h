@@ -12,7 +12,7 @@
 
 #include "mesh/mesh.h"
 #include "sph/neighborhood.h"
-#include "params.h"
+#include "parameters.h"
 #include "sph/particles.h"
 #include "base/stats.h"
 
@@ -31,7 +31,6 @@ struct SurfaceReconstruction {
 SurfaceReconstruction reconstruct_surface(const PositionsView& positions, const ReconstructionParams& params,
                                           const ExecutionOptions& execution, PipelineStats* stats = nullptr);
 
-void validate(const ReconstructionParams& params);
 
 // Marching cubes alone, on a field given as a function (for tests and analytic surfaces): the same table, bricks
 // and stitching as the reconstruction, over the lattice of cube_edge covering [lower, upper]. The field must be

@@ -1,6 +1,6 @@
-"""Rebuilding surfaces on frame change, and keeping the handlers registered across file loads.
+"""Rebuilding a surface's mesh for the current frame: from particle files, a mesh cache or another object.
 
-Rules the handler lives by (it runs inside Blender's frame change, also on the render thread):
+Rules the update lives by (it runs inside Blender's frame change, also on the render thread):
 - it never raises: an exception would print a traceback on every frame, or abort a render. Errors go to the
   object's status line and the mesh is left empty for that frame;
 - it touches only data (no operators, no bpy.context), because during a render it runs beside the UI;
@@ -13,57 +13,41 @@ import time
 import traceback
 
 import bpy
-from bpy.app.handlers import persistent
 
 from .. import api, cache, sequence
-from . import mesh_update, sources
+from . import mesh_update, properties, render_state, sources
+from .surfaces import STATUS_LINE_SEPARATOR, is_surface, surface_objects  # noqa: F401  (re-exported for callers)
 
-STATUS_LINE_SEPARATOR = "\n"
 
-# Folder listings and parsed patterns, shared by all surfaces (particle files and caches alike).
-_sequences = sequence.SequenceCache()
-# What each mesh currently shows: mesh pointer -> (rebuild key, vertex count). The vertex count guards against a
-# pointer reused by a new mesh and against geometry changed behind our back.
-_shown = {}
-# Last error message per mesh pointer: the traceback is printed once, not on every frame.
-_last_error = {}
-# Set between render_init and render_complete/render_cancel: surfaces use their render cube size meanwhile.
-# A flag of our own because bpy.app.is_job_running('RENDER') is False for renders from the command line
-# (`blender -b -a` runs no window-manager job), where the render parameters matter just as much.
-_render_in_progress = False
+class _Memory:
+    """What the updater remembers between frames (one instance, module-level: handlers have nowhere else to keep
+    it); forgotten on file load and on Reload."""
+
+    def __init__(self):
+        # Folder listings and parsed patterns, shared by all surfaces (particle files and caches alike).
+        self.sequences = sequence.SequenceCache()
+        # What each mesh shows: mesh pointer -> (rebuild key, vertex count). The vertex count guards against a
+        # pointer reused by a new mesh and against geometry changed behind our back.
+        self.shown = {}
+        # Last error message per mesh pointer: the traceback is printed once, not on every frame.
+        self.last_error = {}
+
+    def forget(self):
+        self.sequences.clear()
+        self.shown.clear()
+        self.last_error.clear()
+
+
+_memory = _Memory()
 
 
 class SurfaceError(Exception):
-    """A problem the user can fix (bad pattern, missing file): reported without a traceback."""
-
-
-def is_surface(obj):
-    return obj is not None and obj.type == "MESH" and obj.meniscus.is_surface
-
-
-def surface_objects(scene):
-    return [obj for obj in scene.objects if is_surface(obj)]
+    """A problem the user can fix (bad pattern, missing file, a parameter out of range): no traceback."""
 
 
 def forget_cached_state():
     """Drops listings and the record of what meshes show, so the next update re-reads everything."""
-    _sequences.clear()
-    _shown.clear()
-    _last_error.clear()
-
-
-def is_rendering():
-    """True while a final render (still or animation, UI or command line) is in progress."""
-    if _render_in_progress:
-        return True
-    is_job_running = getattr(bpy.app, "is_job_running", None)  # 3.3+
-    if is_job_running is not None:
-        try:
-            return bool(is_job_running("RENDER"))
-        except Exception:
-            pass
-    return False
-
+    _memory.forget()
 
 def _resolve(path_property, obj, what):
     if not path_property:
@@ -71,7 +55,7 @@ def _resolve(path_property, obj, what):
     # Relative paths ('//') are kept in the property and resolved against the .blend (or its library) only here.
     absolute = bpy.path.abspath(path_property, library=obj.library)
     try:
-        return _sequences.pattern(os.path.normpath(absolute))
+        return _memory.sequences.pattern(os.path.normpath(absolute))
     except ValueError as error:
         raise SurfaceError(str(error)) from None
 
@@ -95,36 +79,21 @@ def resolve_cache_pattern(obj):
 
 def available_frames(obj):
     """Frame number -> path of the files of a surface's sequence (cached; re-listed when the folder changes)."""
-    return _sequences.frames(resolve_pattern(obj))
+    return _memory.sequences.frames(resolve_pattern(obj))
 
 
 def available_cache_frames(obj):
-    return _sequences.frames(resolve_cache_pattern(obj))
+    return _memory.sequences.frames(resolve_cache_pattern(obj))
 
 
 def reconstruction_arguments(settings, for_render, normals=None):
-    """api.reconstruct's keyword arguments from a surface's settings (render or viewport cube size)."""
-    return dict(
-        particle_radius=settings.particle_radius,
-        smoothing_length=settings.smoothing_length,
-        cube_size=settings.render_cube_size if for_render else settings.cube_size,
-        iso_threshold=settings.iso_threshold,
-        mesh_cleanup=settings.mesh_cleanup,
-        # The core's convention: a negative distance snaps every vertex.
-        mesh_cleanup_snap_distance=settings.mesh_cleanup_snap_distance if settings.use_snap_distance else -1.0,
-        decimate_barnacles=settings.decimate_barnacles,
-        smoothing_iterations=settings.smoothing_iterations,
-        smoothing_beta=settings.smoothing_strength,
-        smoothing_weights=settings.use_feature_weights,
-        weights_normalization=0.0 if settings.weights_normalization_auto else settings.weights_normalization,
-        volume_restoration=settings.volume_restoration,
-        output_weights=settings.output_weights,
-        normals=settings.use_custom_normals if normals is None else normals,
-        normal_smoothing_iterations=settings.normal_smoothing_iterations,
-        sph_normals=settings.sph_normals,
-        threads=settings.threads,
-        memory_budget=settings.memory_budget_mb * 1024 * 1024,
-    )
+    """api.reconstruct's keyword arguments from a surface's settings; raises SurfaceError naming the panel's
+    labels when a value is not allowed (the core would refuse it under its internal name)."""
+    arguments = properties.pipeline_arguments(settings, for_render, normals)
+    problems = properties.argument_problems(arguments, for_render)
+    if problems:
+        raise SurfaceError("; ".join(problems))
+    return arguments
 
 
 def _file_version(path):
@@ -167,7 +136,7 @@ def _missing_note(result):
 
 def _file_source(obj, settings, mesh, scene_time, for_render):
     pattern = resolve_pattern(obj)
-    lookup = _lookup(_sequences.frames(pattern), pattern, scene_time, settings)
+    lookup = _lookup(_memory.sequences.frames(pattern), pattern, scene_time, settings)
     arguments = reconstruction_arguments(settings, for_render)
     wanted = cache.parse_attribute_names(settings.attribute_names)
     # Everything the mesh depends on: the file (and its version on disk) and every reconstruction parameter.
@@ -191,7 +160,7 @@ def _file_source(obj, settings, mesh, scene_time, for_render):
 
 def _cache_source(obj, settings, mesh, scene_time):
     pattern = resolve_cache_pattern(obj)
-    lookup = _lookup(_sequences.frames(pattern), pattern, scene_time, settings)
+    lookup = _lookup(_memory.sequences.frames(pattern), pattern, scene_time, settings)
     key = ("CACHE", lookup.file_frame, lookup.path, _file_version(lookup.path), settings.use_custom_normals)
 
     def work():
@@ -274,11 +243,11 @@ def update_surface(obj, scene, force=False, depsgraph=None):
 
     key = None
     try:
-        for_render = is_rendering()
+        for_render = render_state.is_rendering()
         if settings.use_cache:
             key, work = _cache_source(obj, settings, mesh, scene_time)
         elif settings.source_type == "OBJECT":
-            if is_subframe and pointer in _shown and not force:
+            if is_subframe and pointer in _memory.shown and not force:
                 # A live simulation moves at every shutter step; one surface per frame is enough (the velocity
                 # attribute carries the motion), so subframes keep what the frame built.
                 return False
@@ -286,16 +255,16 @@ def update_surface(obj, scene, force=False, depsgraph=None):
         else:
             key, work = _file_source(obj, settings, mesh, scene_time, for_render)
 
-        if not force and _shown.get(pointer) == (key, len(mesh.vertices)):
+        if not force and _memory.shown.get(pointer) == (key, len(mesh.vertices)):
             return False
         # Recorded before the work so that a failing file is not retried on every subframe of the same frame.
-        _shown[pointer] = (key, -1)
+        _memory.shown[pointer] = (key, -1)
         try:
             _set_status(settings, work())
         except _Blank as blank:
             _set_status(settings, str(blank))
-        _shown[pointer] = (key, len(mesh.vertices))
-        _last_error.pop(pointer, None)
+        _memory.shown[pointer] = (key, len(mesh.vertices))
+        _memory.last_error.pop(pointer, None)
         return True
     except Exception as error:
         message = str(error) or type(error).__name__
@@ -304,17 +273,17 @@ def update_surface(obj, scene, force=False, depsgraph=None):
         expected = isinstance(error, (SurfaceError, api.FormatError, OSError, MemoryError))
         if isinstance(error, MemoryError) and not str(error):
             message = "Out of memory: use a larger cube size"
-        if _last_error.get(pointer) != message:  # once per distinct problem, not on every frame
+        if _memory.last_error.get(pointer) != message:  # once per distinct problem, not on every frame
             print(f"Meniscus: '{name}' at frame {frame}: {message}")
             if not expected:
                 traceback.print_exc()
-        _last_error[pointer] = message
+        _memory.last_error[pointer] = message
         try:
             mesh_update.clear_surface(mesh)
             if key is None:  # failed before knowing what to show: nothing to remember, try again next time
-                _shown.pop(pointer, None)
+                _memory.shown.pop(pointer, None)
             else:
-                _shown[pointer] = (key, len(mesh.vertices))
+                _memory.shown[pointer] = (key, len(mesh.vertices))
             _set_status(settings, message if expected else f"Error: {message}", is_error=True)
         except Exception:
             traceback.print_exc()
@@ -327,139 +296,3 @@ def update_scene(scene, force=False, depsgraph=None):
     for obj in surface_objects(scene):
         rebuilt += bool(update_surface(obj, scene, force, depsgraph))
     return rebuilt
-
-
-@persistent
-def meniscus_frame_change_post(scene, depsgraph=None):
-    try:
-        update_scene(scene, depsgraph=depsgraph)
-    except Exception:  # update_surface never raises; this guards the loop itself (e.g. a scene being freed)
-        traceback.print_exc()
-
-
-@persistent
-def meniscus_depsgraph_update_post(scene, depsgraph=None):
-    # Live sources change without a frame change too (the user edits the source mesh, a simulation re-bakes):
-    # rebuild the surfaces whose source object is among the updated data. Our own mesh writes also land here;
-    # they are not sources, and an unchanged source hashes to the same key, so this never loops.
-    try:
-        if depsgraph is None or is_rendering():
-            return
-        updated = {update.id.original for update in depsgraph.updates if isinstance(update.id, bpy.types.Object)}
-        if not updated:
-            return
-        for obj in surface_objects(scene):
-            settings = obj.meniscus
-            if settings.source_type == "OBJECT" and not settings.use_cache and settings.source_object in updated:
-                update_surface(obj, scene, depsgraph=depsgraph)
-    except Exception:
-        traceback.print_exc()
-
-
-@persistent
-def meniscus_render_init(scene, *_args):
-    global _render_in_progress
-    _render_in_progress = True
-
-
-@persistent
-def meniscus_render_pre(scene, *_args):
-    # A still render (F12) does not change the frame, so the surface still has the viewport cube size: rebuild it
-    # with the render settings here, before the render evaluates the scene. In an animation render the frame
-    # change has already done so and this finds nothing to do.
-    try:
-        update_scene(scene)
-    except Exception:
-        traceback.print_exc()
-
-
-@persistent
-def meniscus_render_done(scene, *_args):
-    global _render_in_progress
-    _render_in_progress = False
-    if bpy.app.background:  # no viewport to restore; the next frame change uses the viewport settings anyway
-        return
-    # Back to viewport resolution, but on the main thread (this handler may run on the render thread).
-    scene_name = scene.name
-
-    def restore_viewport_surfaces():
-        try:
-            target = bpy.data.scenes.get(scene_name)
-            if target is not None:
-                update_scene(target)
-        except Exception:
-            traceback.print_exc()
-        return None  # once
-
-    bpy.app.timers.register(restore_viewport_surfaces, first_interval=0.1)
-
-
-@persistent
-def meniscus_load_post(*_args):
-    # A new file means new meshes: pointers and listings of the previous file mean nothing any more.
-    forget_cached_state()
-    _append_once(bpy.app.handlers.frame_change_post, meniscus_frame_change_post)
-    try:
-        scene = bpy.context.scene
-        if scene is not None:
-            update_scene(scene)
-    except Exception:
-        traceback.print_exc()
-
-
-@persistent
-def meniscus_undo_redo_post(*_args):
-    # Undo restores parameters, the frame and the meshes as the undo step saved them, which normally agree; the
-    # usual check of file and parameters against what each mesh shows (a rebuild only on a mismatch, e.g. a mesh
-    # that undo moved in memory) guards the cases where they do not.
-    try:
-        scene = bpy.context.scene
-        if scene is not None:
-            update_scene(scene)
-    except Exception:
-        traceback.print_exc()
-
-
-def _remove_ours(handler_list, function):
-    # Matching by name and module (not identity) also removes the copy left by a previous import of this module,
-    # e.g. after the add-on was reloaded without unregistering.
-    for existing in list(handler_list):
-        if getattr(existing, "__name__", None) == function.__name__ and \
-                getattr(existing, "__module__", None) == function.__module__:
-            handler_list.remove(existing)
-
-
-def _append_once(handler_list, function):
-    _remove_ours(handler_list, function)
-    handler_list.append(function)
-
-
-def ensure_registered():
-    """Makes sure the frame handler is installed exactly once (called by the add operator and load_post)."""
-    _append_once(bpy.app.handlers.frame_change_post, meniscus_frame_change_post)
-
-
-def _handler_slots():
-    handlers = bpy.app.handlers
-    return ((handlers.frame_change_post, meniscus_frame_change_post),
-            (handlers.depsgraph_update_post, meniscus_depsgraph_update_post),
-            (handlers.render_init, meniscus_render_init),
-            (handlers.render_pre, meniscus_render_pre),
-            (handlers.render_complete, meniscus_render_done),
-            (handlers.render_cancel, meniscus_render_done),
-            (handlers.load_post, meniscus_load_post),
-            (handlers.undo_post, meniscus_undo_redo_post),
-            (handlers.redo_post, meniscus_undo_redo_post))
-
-
-def register():
-    for handler_list, function in _handler_slots():
-        _append_once(handler_list, function)
-
-
-def unregister():
-    global _render_in_progress
-    for handler_list, function in _handler_slots():
-        _remove_ours(handler_list, function)
-    forget_cached_state()
-    _render_in_progress = False

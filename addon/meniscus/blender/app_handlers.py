@@ -1,0 +1,153 @@
+"""Blender's application handlers: frame changes, live-source edits, renders, file loads and undo call the updater.
+Registered once (re-registration and a reloaded module replace, never duplicate them); persistent across file
+loads, where load_post also converts settings saved by older versions."""
+import traceback
+
+import bpy
+from bpy.app.handlers import persistent
+
+from . import properties, render_state, update
+from .surfaces import surface_objects
+
+@persistent
+def meniscus_frame_change_post(scene, depsgraph=None):
+    try:
+        update.update_scene(scene, depsgraph=depsgraph)
+    except Exception:  # update_surface never raises; this guards the loop itself (e.g. a scene being freed)
+        traceback.print_exc()
+
+
+@persistent
+def meniscus_depsgraph_update_post(scene, depsgraph=None):
+    # Live sources change without a frame change too (the user edits the source mesh, a simulation re-bakes):
+    # rebuild the surfaces whose source object is among the updated data. Our own mesh writes also land here;
+    # they are not sources, and an unchanged source hashes to the same key, so this never loops.
+    try:
+        if depsgraph is None or render_state.is_rendering():
+            return
+        updated = {update.id.original for update in depsgraph.updates if isinstance(update.id, bpy.types.Object)}
+        if not updated:
+            return
+        for obj in surface_objects(scene):
+            settings = obj.meniscus
+            if settings.source_type == "OBJECT" and not settings.use_cache and settings.source_object in updated:
+                update.update_surface(obj, scene, depsgraph=depsgraph)
+    except Exception:
+        traceback.print_exc()
+
+
+@persistent
+def meniscus_render_init(scene, *_args):
+    render_state.set_rendering(True)
+
+
+@persistent
+def meniscus_render_pre(scene, *_args):
+    # A still render (F12) does not change the frame, so the surface still has the viewport cube size: rebuild it
+    # with the render settings here, before the render evaluates the scene. In an animation render the frame
+    # change has already done so and this finds nothing to do.
+    try:
+        update.update_scene(scene)
+    except Exception:
+        traceback.print_exc()
+
+
+@persistent
+def meniscus_render_done(scene, *_args):
+    render_state.set_rendering(False)
+    if bpy.app.background:  # no viewport to restore; the next frame change uses the viewport settings anyway
+        return
+    # Back to viewport resolution, but on the main thread (this handler may run on the render thread).
+    scene_name = scene.name
+
+    def restore_viewport_surfaces():
+        try:
+            target = bpy.data.scenes.get(scene_name)
+            if target is not None:
+                update.update_scene(target)
+        except Exception:
+            traceback.print_exc()
+        return None  # once
+
+    bpy.app.timers.register(restore_viewport_surfaces, first_interval=0.1)
+
+
+def _migrate_all_settings():
+    """Settings saved by older versions of the add-on, converted in every object that has them."""
+    for obj in bpy.data.objects:
+        if obj.type == "MESH" and obj.meniscus.get("is_surface"):
+            try:
+                properties.migrate_settings(obj.meniscus)
+            except Exception:  # a library object is read-only; it keeps its old values
+                traceback.print_exc()
+
+
+@persistent
+def meniscus_load_post(*_args):
+    # A new file means new meshes: pointers and listings of the previous file mean nothing any more.
+    update.forget_cached_state()
+    _migrate_all_settings()
+    _append_once(bpy.app.handlers.frame_change_post, meniscus_frame_change_post)
+    try:
+        scene = bpy.context.scene
+        if scene is not None:
+            update.update_scene(scene)
+    except Exception:
+        traceback.print_exc()
+
+
+@persistent
+def meniscus_undo_redo_post(*_args):
+    # Undo restores parameters, the frame and the meshes as the undo step saved them, which normally agree; the
+    # usual check of file and parameters against what each mesh shows (a rebuild only on a mismatch, e.g. a mesh
+    # that undo moved in memory) guards the cases where they do not.
+    try:
+        scene = bpy.context.scene
+        if scene is not None:
+            update.update_scene(scene)
+    except Exception:
+        traceback.print_exc()
+
+
+def _remove_ours(handler_list, function):
+    # Matching by name and module (not identity) also removes the copy left by a previous import of this module,
+    # e.g. after the add-on was reloaded without unregistering.
+    for existing in list(handler_list):
+        if getattr(existing, "__name__", None) == function.__name__ and \
+                getattr(existing, "__module__", None) == function.__module__:
+            handler_list.remove(existing)
+
+
+def _append_once(handler_list, function):
+    _remove_ours(handler_list, function)
+    handler_list.append(function)
+
+
+def ensure_registered():
+    """Makes sure the frame handler is installed exactly once (called by the add operator and load_post)."""
+    _append_once(bpy.app.handlers.frame_change_post, meniscus_frame_change_post)
+
+
+def _handler_slots():
+    handlers = bpy.app.handlers
+    return ((handlers.frame_change_post, meniscus_frame_change_post),
+            (handlers.depsgraph_update_post, meniscus_depsgraph_update_post),
+            (handlers.render_init, meniscus_render_init),
+            (handlers.render_pre, meniscus_render_pre),
+            (handlers.render_complete, meniscus_render_done),
+            (handlers.render_cancel, meniscus_render_done),
+            (handlers.load_post, meniscus_load_post),
+            (handlers.undo_post, meniscus_undo_redo_post),
+            (handlers.redo_post, meniscus_undo_redo_post))
+
+
+def register():
+    for handler_list, function in _handler_slots():
+        _append_once(handler_list, function)
+
+
+def unregister():
+    for handler_list, function in _handler_slots():
+        _remove_ours(handler_list, function)
+    update.forget_cached_state()
+    render_state.set_rendering(False)

@@ -1,0 +1,87 @@
+"""The pipeline's parameters, as the core's schema defines them (native/core/parameters.cpp): name, type, default,
+range, unit, help text and their spelling on the command line and in Blender. The Python API builds
+reconstruct()'s signature and docstring from it and the Blender add-on its properties, so that every interface has
+the same parameters with the same defaults.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Dict, Optional, Tuple
+
+from . import _core
+
+
+@dataclass(frozen=True)
+class Parameter:
+    name: str                 # keyword of reconstruct() and the Blender property
+    group: str                # surface, mesh, smoothing, normals, output, execution
+    type: str                 # "flag", "count" or "real"
+    label: str                # as Blender shows it
+    cli: str                  # command-line flag(s)
+    cli_style: str            # "value", "on_off" or "flag"
+    unit: str
+    help: str
+    default: float
+    minimum: float
+    maximum: float
+    minimum_open: bool
+    maximum_open: bool
+    automatic: Optional[float]  # the value meaning "choose automatically", outside the range
+    automatic_word: str
+    suggested: float          # a value to offer where the default is automatic or required
+    soft_minimum: float
+    soft_maximum: float
+    required: bool
+    depends_on: str           # a flag or count that must be on for this parameter to matter
+    allowed: str              # the allowed values in words
+
+    @property
+    def python_default(self):
+        """The default as the Python type of the parameter (bool, int or float)."""
+        return convert(self, self.default)
+
+    def problem(self, value) -> Optional[str]:
+        """What is wrong with a value ('must be greater than 0 and at most 1, got 0'), or None."""
+        return _core.parameter_problem(self.name, float(value))
+
+    def describe(self) -> str:
+        """One line of documentation: meaning, unit, allowed values and default."""
+        unit = f" [{self.unit}]" if self.unit else ""
+        default = "required" if self.required else f"default {format_value(self, self.default)}"
+        allowed = "" if self.type == "flag" else f"; {self.allowed}"
+        return f"{self.help}{unit}{allowed}; {default}."
+
+
+def convert(parameter: Parameter, value: float):
+    if parameter.type == "flag":
+        return bool(value)
+    if parameter.type == "count":
+        return int(value)
+    return float(value)
+
+
+def format_value(parameter: Parameter, value: float) -> str:
+    """A value as people read it: True/False, whole numbers without a point, 'auto' where it means automatic."""
+    if parameter.automatic is not None and value == parameter.automatic:
+        return f"{_core.format_number(value)} ({parameter.automatic_word})"
+    if parameter.type == "flag":
+        return str(bool(value))
+    return _core.format_number(float(value))
+
+
+PARAMETERS: Tuple[Parameter, ...] = tuple(Parameter(**entry) for entry in _core.parameter_schema())
+BY_NAME: Dict[str, Parameter] = {p.name: p for p in PARAMETERS}
+GROUPS: Tuple[str, ...] = tuple(dict.fromkeys(p.group for p in PARAMETERS))
+
+
+def defaults() -> Dict[str, object]:
+    """Every parameter that has a default, at its default (the paper's pipeline)."""
+    return {p.name: p.python_default for p in PARAMETERS if not p.required}
+
+
+def is_finite_number(value) -> bool:
+    try:
+        return math.isfinite(float(value))
+    except (TypeError, ValueError):
+        return False

@@ -1,0 +1,96 @@
+"""One parameter schema for every interface: the Python API's signature and checks, the command line's flags and
+the README's list all come from native/core/parameters.cpp, with the same defaults (the paper's pipeline)."""
+import inspect
+import pathlib
+import re
+import subprocess
+
+import numpy as np
+import pytest
+
+import meniscus
+from meniscus import parameters
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+BUNNY = "splashsurf/bunny_frame_14_7705_particles.vtk"
+DAM_BREAK = "splashsurf/double_dam_break_frame_26_4732_particles.vtk"
+
+
+def test_schema_is_complete_and_consistent():
+    names = [p.name for p in parameters.PARAMETERS]
+    assert len(names) == len(set(names))
+    for p in parameters.PARAMETERS:
+        assert p.type in ("flag", "count", "real") and p.group and p.label and p.cli.startswith("-")
+        assert len(p.help) > 20 and p.help[0].isupper(), p.name
+        if not p.required:
+            assert p.problem(p.default) is None, f"{p.name}: its default {p.default} is not allowed"
+        if p.automatic is not None:
+            assert p.problem(p.automatic) is None and p.problem(p.suggested) is None, p.name
+        if p.depends_on:
+            assert parameters.BY_NAME[p.depends_on].type in ("flag", "count"), p.name
+
+
+def test_reconstruct_signature_is_the_schema():
+    signature = inspect.signature(meniscus.reconstruct).parameters
+    for p in parameters.PARAMETERS:
+        assert p.name in signature, p.name
+        if not p.required:
+            assert signature[p.name].default == p.python_default
+            assert type(signature[p.name].default) is {"flag": bool, "count": int, "real": float}[p.type]
+        assert f"  {p.name}: {p.help}" in meniscus.reconstruct.__doc__
+
+
+def test_default_reconstruction_is_the_papers_pipeline(shared):
+    positions = meniscus.read_particles(shared / DAM_BREAK).positions
+    mesh = meniscus.reconstruct(positions, 0.025)  # nothing but the radius: what the CLI and the add-on do too
+    for stage in ("decimation", "weights", "smoothing", "normals"):
+        assert stage in mesh.stats["seconds"], stage
+    assert "decimated_configurations" in mesh.stats["counts"]
+    raw = meniscus.reconstruct(positions, 0.025, decimate_barnacles=False, smoothing_iterations=0,
+                               normal_smoothing_iterations=0)
+    smoothed, rough = meniscus.assess_quality(mesh), meniscus.assess_quality(raw)
+    assert smoothed["check"]["ok"] and smoothed["bumpiness"] < 0.5 * rough["bumpiness"]
+
+
+@pytest.mark.parametrize("name, value, message", [
+    ("smoothing_strength", 0.0, "smoothing_strength must be a number greater than 0 and at most 1, got 0"),
+    ("smoothing_iterations", 2.5, "smoothing_iterations must be a whole number at least 0, got 2.5"),
+    ("decimate_barnacles", 1, "decimate_barnacles must be True or False, got 1"),
+    ("cube_size", "fine", "cube_size must be a number greater than 0, got 'fine'"),
+    ("weights_normalization", -2.0, "weights_normalization must be a number greater than 0, or 0 for automatic"),
+    ("threads", -1, "threads must be a whole number at least 1 and at most 4096, or 0 for automatic (all), got -1"),
+])
+def test_bad_values_name_the_parameter_and_the_allowed_values(name, value, message):
+    with pytest.raises(ValueError) as error:
+        meniscus.reconstruct(np.zeros((1, 3), np.float32), 0.025, **{name: value})
+    assert message in str(error.value)
+
+
+def test_unknown_parameter_is_a_type_error_listing_the_parameters():
+    with pytest.raises(TypeError, match="unknown parameter.*'smoothing_beta'.*smoothing_strength"):
+        meniscus.reconstruct(np.zeros((1, 3), np.float32), 0.025, smoothing_beta=0.5)
+
+
+def test_numbers_are_formatted_for_people():
+    assert parameters.format_value(parameters.BY_NAME["smoothing_strength"], 0.0) == "0"
+    assert parameters.format_value(parameters.BY_NAME["cube_size"], np.float32(0.1)) == "0.1"
+    assert parameters.format_value(parameters.BY_NAME["memory_budget"], 0.0) == "0 (auto)"
+    assert meniscus.parameters.BY_NAME["particle_radius"].problem(0.0) == "must be a number greater than 0, got 0"
+
+
+def test_command_line_flags_and_defaults_are_the_schema(cli):
+    help_text = subprocess.run([cli, "reconstruct", "--help"], capture_output=True, text=True).stdout
+    for p in parameters.PARAMETERS:
+        flag = p.cli.split(",")[0]
+        assert flag in help_text, flag
+        if p.cli_style == "value" and not p.required:
+            default = p.automatic_word if p.automatic == p.default else meniscus._core.format_number(p.default)
+            assert re.search(re.escape(p.cli) + r" \S+=" + re.escape(default) + r"\b", help_text), (p.name, default)
+        elif p.cli_style == "on_off":
+            assert f"{p.cli} on|off={'on' if p.default else 'off'}" in help_text, p.name
+
+
+def test_readme_lists_every_flag():
+    readme = (ROOT / "README.md").read_text()
+    missing = [p.cli for p in parameters.PARAMETERS if not any(f"`{name}" in readme for name in p.cli.split(","))]
+    assert not missing, f"README does not mention {missing}"
