@@ -299,7 +299,9 @@ def write_report(json_paths, output=RESULTS):
                      f"{summary['min']['total']:.3f} | {summary['min']['core']:.3f} | {_load(summary)} |")
     lines += [
         "", "Reproduce: `bash bench/blender_frame_change.sh` (or the three commands in the header of "
-        "`bench/blender_frame_change.py`).", "",
+        "`bench/blender_frame_change.py`); other bpy versions for Python 3.11 through `BPY_PYTHONS`, e.g. "
+        "`BPY_PYTHONS=\"/tmp/venvs/bpy-4.2/bin/python /tmp/venvs/bpy-5.0/bin/python\" bash "
+        "bench/blender_frame_change.sh`.", "",
     ]
     output.with_suffix(".md").write_text("\n".join(lines))
     output.with_suffix(".json").write_text(json.dumps(records, indent=1))

@@ -2,12 +2,29 @@
 
 The per-frame path reuses one Mesh and fills it with `foreach_set` from contiguous numpy buffers, which is several
 times faster than `from_pydata` and skips `validate()` (the core's meshes are consistent by construction).
+bench/blender_mesh_write_profile.py times every step below on each Blender version
+(bench/results/blender_mesh_write_profile.md); for 1 M triangles on this project's 2-core machine:
+
+- foreach_set only copies a buffer in one go when its item type matches the RNA property exactly, unsigned
+  included: `vertex_index`, `loop_start`, `loop_total`, edge `vertices` and `edge_index` are unsigned, so they are
+  written from uint32 views (int32 falls back to a per-item conversion: 0.13-0.27 s for the corners alone).
+- From 4.0, positions, corner vertices, edge vertices and corner edges are generic attributes (`position`,
+  `.corner_vert`, `.edge_verts`, `.corner_edge`) written directly, without the per-item MeshVertex/MeshLoop access.
+- Edges are computed here (one sort of the corners' vertex pairs in numpy, 0.06-0.2 s) and written with the
+  corners' edge indices, instead of `Mesh.update(calc_edges=True)`, Blender's hash maps (0.4-0.75 s).
+- From 4.0 faces are smooth when the `sharp_face` attribute is absent, as it is after `clear_geometry`, so
+  `use_smooth` is not written (on 5.x that write alone costs 0.1-0.17 s).
 
 Version differences handled here:
 - Blender < 4.0: `MeshPolygon.loop_total` is stored and starts at 0 after `polygons.add`, so it must be written;
   from 4.0 it is derived from the offsets (`loop_start`) and read-only.
 - Blender < 4.1: custom normals only take effect with `Mesh.use_auto_smooth`; 4.1 removed that property and
   custom normals work on their own.
+- Blender < 4.5: custom normals can only be set through `normals_split_custom_set_from_vertices`, which encodes them
+  in every corner's normal space (0.8-1.0 s; per corner, `normals_split_custom_set`, is slower still), and on 3.4
+  auto smooth recomputes split normals at every depsgraph evaluation (0.6-0.7 s). The add-on's "Custom Normals" off
+  avoids both; Blender's own vertex normals then differ from the core's by 1.4 degrees (median, 4.2 at the 99th
+  percentile).
 """
 import bpy
 import numpy as np
@@ -19,6 +36,8 @@ CUSTOM_NORMALS_NEED_AUTO_SMOOTH = BLENDER_VERSION < (4, 1, 0)
 # written with one foreach_set (0.002 s for 1 M triangles, against 1.5 s for normals_split_custom_set_from_vertices;
 # bench/results/blender_mesh_update.md).
 CUSTOM_NORMALS_AS_POINT_ATTRIBUTE = BLENDER_VERSION >= (4, 5, 0)
+# 4.0 stores the mesh's topology as generic attributes and face smoothness as the absence of `sharp_face`.
+GEOMETRY_AS_ATTRIBUTES = BLENDER_VERSION >= (4, 0, 0)
 
 VELOCITY_ATTRIBUTE = "velocity"  # the name Cycles reads for motion blur of meshes whose topology changes
 # Names with a meaning of their own in some Blender version: built-in mesh layers ('position', 'sharp_face', ...),
@@ -37,6 +56,11 @@ def _flat(array, dtype):
     # foreach_set reads the buffer directly when dtype and layout match the RNA property; anything else would make
     # it fall back to a slow element-by-element conversion.
     return np.ascontiguousarray(array, dtype=dtype).reshape(-1)
+
+
+def _unsigned(indices):
+    """uint32 view of non-negative int32 indices (a copy only when they are not contiguous int32)."""
+    return _flat(indices, np.int32).view(np.uint32)
 
 
 def clear_surface(mesh):
@@ -62,17 +86,15 @@ def write_surface(mesh, vertices, triangles, normals=None, point_attributes=None
         mesh.update()
         return {}
 
-    mesh.vertices.add(vertex_count)
-    mesh.vertices.foreach_set("co", _flat(vertices, np.float32))
-    mesh.loops.add(3 * triangle_count)
-    mesh.loops.foreach_set("vertex_index", _flat(triangles, np.int32))
-    mesh.polygons.add(triangle_count)
-    mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * triangle_count, 3, dtype=np.int32))
-    if POLYGON_LOOP_TOTAL_IS_STORED:
-        mesh.polygons.foreach_set("loop_total", np.full(triangle_count, 3, dtype=np.int32))
-    # A fluid surface has no hard edges: every face smooth, so shading interpolates the vertex normals.
-    mesh.polygons.foreach_set("use_smooth", np.ones(triangle_count, dtype=bool))
-    mesh.update(calc_edges=True)
+    triangles = np.ascontiguousarray(triangles, dtype=np.int32).reshape(-1, 3)
+    _write_vertices(mesh, vertices)
+    _write_faces(mesh, triangles)
+    edges = _compute_edges(triangles, vertex_count)
+    if edges is None:
+        mesh.update(calc_edges=True)  # degenerate triangles: let Blender decide what their edges are
+    else:
+        _write_edges(mesh, *edges)
+        mesh.update()  # the edges exist: no calc_edges
 
     stored_elsewhere = {}
     for name, values in (point_attributes or {}).items():
@@ -80,7 +102,126 @@ def write_surface(mesh, vertices, triangles, normals=None, point_attributes=None
         if stored != name:
             stored_elsewhere[name] = stored
 
-    if normals is not None and len(normals) == vertex_count and CUSTOM_NORMALS_AS_POINT_ATTRIBUTE:
+    if normals is not None and len(normals) == vertex_count:
+        _write_custom_normals(mesh, normals)
+    elif CUSTOM_NORMALS_NEED_AUTO_SMOOTH:
+        # Without custom normals, auto smooth would only add splits at sharp angles: plain smooth shading is wanted.
+        mesh.use_auto_smooth = False
+    return stored_elsewhere
+
+
+def _write_vertices(mesh, vertices):
+    mesh.vertices.add(len(vertices))
+    if GEOMETRY_AS_ATTRIBUTES:
+        mesh.attributes["position"].data.foreach_set("vector", _flat(vertices, np.float32))
+    else:
+        mesh.vertices.foreach_set("co", _flat(vertices, np.float32))
+
+
+def _write_faces(mesh, triangles):
+    """Corners (loops) and faces (polygons) of a (F, 3) int32 triangle array, every face smooth."""
+    triangle_count = len(triangles)
+    mesh.loops.add(3 * triangle_count)
+    if GEOMETRY_AS_ATTRIBUTES:
+        mesh.attributes[".corner_vert"].data.foreach_set("value", triangles.reshape(-1))
+    else:
+        mesh.loops.foreach_set("vertex_index", _unsigned(triangles))
+    mesh.polygons.add(triangle_count)
+    mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * triangle_count, 3, dtype=np.uint32))
+    if POLYGON_LOOP_TOTAL_IS_STORED:
+        mesh.polygons.foreach_set("loop_total", np.full(triangle_count, 3, dtype=np.uint32))
+    # A fluid surface has no hard edges: every face smooth, so shading interpolates the vertex normals.
+    if GEOMETRY_AS_ATTRIBUTES:
+        sharp_face = mesh.attributes.get("sharp_face")  # absent after clear_geometry: all faces smooth
+        if sharp_face is not None:
+            mesh.attributes.remove(sharp_face)
+    else:
+        mesh.polygons.foreach_set("use_smooth", np.ones(triangle_count, dtype=bool))
+
+
+def _int64_sort_kind():
+    """The faster numpy sort for _compute_edges' keys; both give the same result (the keys are all distinct).
+
+    numpy sorts int64 with SIMD (x86-simd-sort) from 1.25 on AVX-512 and from 2.0 on AVX2 too: 'quicksort' then
+    takes 0.02-0.03 s for 3 M keys. Elsewhere its quicksort is scalar (0.11-0.23 s with numpy 1.24 here) and
+    'stable' (timsort) is faster, 0.06 s, because the core's corners come partly ordered by vertex.
+    """
+    try:
+        version = tuple(int(part) for part in np.__version__.split(".")[:2])
+        core = getattr(np, "_core", None) or np.core
+        features = core._multiarray_umath.__cpu_features__
+    except (AttributeError, ValueError):
+        return "stable"
+    if (version >= (1, 25) and features.get("AVX512_SKX")) or (version >= (2, 0) and features.get("AVX2")):
+        return "quicksort"
+    return "stable"
+
+
+_SORT_KIND = _int64_sort_kind()
+
+
+def _compute_edges(triangles, vertex_count):
+    """(edges (E, 2) int32 with v0 < v1, corner_edges (3F,) int32) of a (F, 3) int32 triangle array, or None when a
+    triangle repeats a vertex (an edge from a vertex to itself, which Blender leaves out).
+
+    Corner i's edge joins its vertex to the next corner's vertex of the same face, as Blender defines `.corner_edge`.
+    The corners' (low, high) vertex pairs are sorted once, with the corner index packed into the low bits of the
+    same int64 key when it fits (a plain sort is 2-3x faster than an argsort), and numbered in order.
+    """
+    corners = triangles.reshape(-1)
+    following = np.empty_like(triangles)  # each corner's next corner in its face
+    following[:, :2] = triangles[:, 1:]
+    following[:, 2] = triangles[:, 0]
+    following = following.reshape(-1)
+    low = np.minimum(corners, following)
+    high = np.maximum(corners, following)
+    if np.any(low == high):
+        return None
+    count = len(corners)
+    vertex_bits = max(int(vertex_count - 1).bit_length(), 1)
+    corner_bits = max(int(count - 1).bit_length(), 1)
+    if 2 * vertex_bits + corner_bits <= 63:
+        keys = low.astype(np.int64)
+        keys <<= vertex_bits
+        keys |= high
+        keys <<= corner_bits
+        keys |= np.arange(count, dtype=np.int64)
+        keys.sort(kind=_SORT_KIND)
+        order = keys & ((1 << corner_bits) - 1)
+        keys >>= corner_bits
+    else:  # no room for the corner index (above ~1 M vertices): an argsort carries the order instead
+        vertex_bits = 32
+        keys = low.astype(np.int64)
+        keys <<= vertex_bits
+        keys |= high
+        order = np.argsort(keys, kind=_SORT_KIND)
+        keys = keys[order]
+    first = np.empty(count, dtype=bool)
+    first[0] = True
+    np.not_equal(keys[1:], keys[:-1], out=first[1:])
+    numbers = np.cumsum(first, dtype=np.int32)
+    numbers -= 1
+    corner_edges = np.empty(count, dtype=np.int32)
+    corner_edges[order] = numbers
+    unique = np.compress(first, keys)
+    edges = np.empty((len(unique), 2), dtype=np.int32)
+    np.right_shift(unique, vertex_bits, out=edges[:, 0], casting="unsafe")
+    np.bitwise_and(unique, (1 << vertex_bits) - 1, out=edges[:, 1], casting="unsafe")
+    return edges, corner_edges
+
+
+def _write_edges(mesh, edges, corner_edges):
+    mesh.edges.add(len(edges))
+    if GEOMETRY_AS_ATTRIBUTES:
+        mesh.attributes[".edge_verts"].data.foreach_set("value", edges.reshape(-1))
+        mesh.attributes[".corner_edge"].data.foreach_set("value", corner_edges)
+    else:
+        mesh.edges.foreach_set("vertices", _unsigned(edges))
+        mesh.loops.foreach_set("edge_index", _unsigned(corner_edges))
+
+
+def _write_custom_normals(mesh, normals):
+    if CUSTOM_NORMALS_AS_POINT_ATTRIBUTE:
         attribute = mesh.attributes.get("custom_normal")
         if attribute is not None and (attribute.domain != "POINT" or attribute.data_type != "FLOAT_VECTOR"):
             mesh.attributes.remove(attribute)
@@ -88,16 +229,12 @@ def write_surface(mesh, vertices, triangles, normals=None, point_attributes=None
         if attribute is None:
             attribute = mesh.attributes.new("custom_normal", "FLOAT_VECTOR", "POINT")
         attribute.data.foreach_set("vector", _flat(normals, np.float32))
-    elif normals is not None and len(normals) == vertex_count:
-        if CUSTOM_NORMALS_NEED_AUTO_SMOOTH:
-            mesh.use_auto_smooth = True
-            # Auto smooth also splits normals at edges sharper than this angle; custom normals should win everywhere.
-            mesh.auto_smooth_angle = np.pi
-        mesh.normals_split_custom_set_from_vertices(np.ascontiguousarray(normals, dtype=np.float32))
-    elif CUSTOM_NORMALS_NEED_AUTO_SMOOTH:
-        # Without custom normals, auto smooth would only add splits at sharp angles: plain smooth shading is wanted.
-        mesh.use_auto_smooth = False
-    return stored_elsewhere
+        return
+    if CUSTOM_NORMALS_NEED_AUTO_SMOOTH:
+        mesh.use_auto_smooth = True
+        # Auto smooth also splits normals at edges sharper than this angle; custom normals should win everywhere.
+        mesh.auto_smooth_angle = np.pi
+    mesh.normals_split_custom_set_from_vertices(np.ascontiguousarray(normals, dtype=np.float32))
 
 
 # Attribute layout by value kind and width: (data type, the RNA property foreach_set writes, buffer dtype).
