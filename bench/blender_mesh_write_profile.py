@@ -3,7 +3,7 @@
     /usr/bin/python3 bench/blender_mesh_write_profile.py --prepare        # once: the two surfaces (core, Python 3.11)
     blender -b --factory-startup --python-exit-code 1 --python bench/blender_mesh_write_profile.py -- \
         --json build/bench/mesh_write_profile_3.4.json
-    /tmp/venvs/bpy-5.2/bin/python bench/blender_mesh_write_profile.py -- --json build/bench/mesh_write_profile_5.2.json
+    build/venv/bpy-5.2/bin/python bench/blender_mesh_write_profile.py -- --json build/bench/mesh_write_profile_5.2.json
     /usr/bin/python3 bench/blender_mesh_write_profile.py --report build/bench/mesh_write_profile_*.json
     bash bench/blender_mesh_write_profile.sh                              # all of the above, every Blender found
 
