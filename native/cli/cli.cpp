@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "base/errors.h"
+#include "io/frame_pattern.h"
 #include "io/io.h"
 #include "io/io_util.h"
 #include "base/memory.h"
@@ -36,53 +37,36 @@ using namespace meniscus;
 namespace {
 
 // ---- sequences ------------------------------------------------------------------------------------------------
-// "{}" in a file name stands for the frame number, with or without zero padding: frames are found by listing the
-// folder, so fluid_{}.vtk matches fluid_7.vtk and fluid_0007.vtk alike.
+// The frame-pattern rule (io/frame_pattern.h) shared with the Python API and the add-on: {} or #### in the input
+// name stands for the frame number; fluid_{}.vtk matches fluid_7.vtk and fluid_0007.vtk alike.
 struct Frame {
     long number;
-    std::string digits;  // as written in the input name, reused for the output name
+    std::string digits;  // as written in the input name, reused for an output name with {}
     std::string path;
 };
 
-bool is_sequence(const std::string& pattern) { return pattern.find("{}") != std::string::npos; }
+bool is_sequence(const std::string& pattern) { return has_frame_placeholder(pattern); }
 
-std::string substitute(const std::string& pattern, const std::string& digits) {
-    std::string out = pattern;
-    const auto at = out.find("{}");
-    if (at != std::string::npos) out.replace(at, 2, digits);
-    return out;
+// An output (or raw-output) name for a frame: {} takes the input's digits as written, #### pads to its width.
+std::string output_path(const std::string& pattern, const Frame& frame) {
+    const std::size_t at = pattern.find("{}");
+    if (at != std::string::npos) return std::string(pattern).replace(at, 2, frame.digits);
+    return parse_frame_pattern(pattern, std::vector<std::string>{}).path(frame.number);
 }
 
-std::vector<Frame> find_frames(const std::string& pattern) {
-    const fs::path path = path_from_utf8(pattern);
-    const std::string name = path_to_utf8(path.filename());
-    const auto at = name.find("{}");
-    if (at == std::string::npos) throw InputError("input pattern '" + pattern + "': '{}' must be in the file name, not the folder");
-    const std::string prefix = name.substr(0, at), suffix = name.substr(at + 2);
-    const fs::path folder = path.has_parent_path() ? path.parent_path() : fs::path(".");
+// The frames of the input pattern; `duplicates` gets a line per frame spelled twice (which one is used and why).
+std::vector<Frame> find_frames(const FramePattern& pattern, const std::string& input, std::vector<std::string>& duplicates) {
     std::error_code error;
-    if (!fs::is_directory(folder, error)) throw InputError("input pattern '" + pattern + "': folder '" + path_to_utf8(folder) + "' does not exist");
-    std::map<long, Frame> frames;
-    for (const auto& entry : fs::directory_iterator(folder, error)) {
-        const std::string file = path_to_utf8(entry.path().filename());
-        if (file.size() <= prefix.size() + suffix.size() || file.compare(0, prefix.size(), prefix) != 0 ||
-            file.compare(file.size() - suffix.size(), suffix.size(), suffix) != 0)
-            continue;
-        const std::string digits = file.substr(prefix.size(), file.size() - prefix.size() - suffix.size());
-        if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
-        const long number = std::stol(digits);
-        // Duplicate frame numbers (fluid_7 and fluid_007): keep the first name in sorted order, deterministically,
-        // and say so.
-        auto it = frames.find(number);
-        const std::string full = path_to_utf8(folder / entry.path().filename());
-        if (it != frames.end())
-            std::fprintf(stderr, "warning: frame %ld matches both %s and %s; using %s\n", number, it->second.path.c_str(), full.c_str(),
-                         std::min(full, it->second.path).c_str());
-        if (it == frames.end() || full < it->second.path) frames[number] = {number, digits, full};
+    if (!pattern.directory.empty() && !fs::is_directory(path_from_utf8(pattern.directory), error))
+        throw InputError("input pattern '" + input + "': folder '" + pattern.directory + "' does not exist");
+    const FrameListing listing = list_frames(pattern);
+    duplicates = listing.duplicates;
+    std::vector<Frame> frames;
+    for (const auto& [number, path] : listing.frames) {
+        const std::string name = path_to_utf8(path_from_utf8(path).filename());
+        frames.push_back({static_cast<long>(number), name.substr(pattern.prefix.size(), name.size() - pattern.prefix.size() - pattern.suffix.size()), path});
     }
-    std::vector<Frame> result;
-    for (auto& kv : frames) result.push_back(kv.second);
-    return result;
+    return frames;
 }
 
 // ---- progress -------------------------------------------------------------------------------------------------
@@ -261,12 +245,16 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
     validate(args.parameters);
 
     std::vector<Frame> frames;
+    std::vector<std::string> duplicates;
     const bool sequence = is_sequence(args.input);
+    std::optional<FramePattern> input_pattern;
     if (sequence) {
-        if (!args.output.empty() && !is_sequence(args.output)) throw InputError("output '" + args.output + "' needs '{}' for a sequence input");
+        if (!args.output.empty() && !is_sequence(args.output))
+            throw InputError("output '" + args.output + "' needs {} or #### for the frame number of a sequence input");
         if (!args.raw_output.empty() && !is_sequence(args.raw_output))
-            throw InputError("--output-raw-mesh '" + args.raw_output + "' needs '{}' for a sequence input");
-        std::vector<Frame> found = find_frames(args.input);
+            throw InputError("--output-raw-mesh '" + args.raw_output + "' needs {} or #### for the frame number of a sequence input");
+        input_pattern = parse_frame_pattern(args.input);
+        std::vector<Frame> found = find_frames(*input_pattern, args.input, duplicates);
         const long first = args.start ? *args.start : (found.empty() ? 0 : found.front().number);
         const long last = args.end ? *args.end : (found.empty() ? -1 : found.back().number);
         std::map<long, Frame> by_number;
@@ -282,6 +270,7 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
     }
 
     Progress progress(frames.size(), !args.quiet && is_terminal(stderr));
+    for (const std::string& duplicate : duplicates) progress.message("warning: " + duplicate);
     json report;
     report["parameters"] = json::object();
     for (const ParameterSpec& spec : parameter_schema()) {
@@ -305,9 +294,10 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
         const std::string label = sequence ? "frame " + std::to_string(frame.number) : path_to_utf8(path_from_utf8(frame.path).filename());
         json record;
         try {
-            if (frame.path.empty()) throw InputError("frame " + std::to_string(frame.number) + " is missing (" + substitute(args.input, "<" + std::to_string(frame.number) + ">") + ")");
-            record = run_frame(args, frame.path, sequence ? substitute(args.output, frame.digits) : args.output,
-                               sequence ? substitute(args.raw_output, frame.digits) : args.raw_output, progress);
+            if (frame.path.empty())
+                throw InputError("frame " + std::to_string(frame.number) + " is missing (" + input_pattern->path(frame.number) + ")");
+            record = run_frame(args, frame.path, sequence ? output_path(args.output, frame) : args.output,
+                               sequence && !args.raw_output.empty() ? output_path(args.raw_output, frame) : args.raw_output, progress);
             if (record.contains("failed")) ++failed;
         } catch (const std::exception& e) {
             ++failed;

@@ -9,11 +9,13 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "cli.h"
 #include "base/errors.h"
+#include "io/frame_pattern.h"
 #include "io/io.h"
 #include "parameters.h"
 #include "pipeline.h"
@@ -319,6 +321,25 @@ PYBIND11_MODULE(_core, m) {
     m.def("format_number", &format_number, py::arg("value"), "A number as people write it (0, 0.5, 2.5e-06).");
     m.def("run_cli", &run_cli_in_python, py::arg("arguments"),
           "Runs the meniscus command line (arguments[0] is the program name); returns the exit status.");
+    // Frame patterns (io/frame_pattern.h): the rule the command line uses, for the Python API and the add-on.
+    m.def("parse_frame_pattern", [](const std::string& path, std::optional<std::vector<std::string>> sibling_names) {
+        const FramePattern p = parse_frame_pattern(path, sibling_names);
+        return py::make_tuple(p.directory, p.prefix, p.suffix, p.padding);
+    }, py::arg("path"), py::arg("sibling_names") = py::none(),
+          "(directory, prefix, suffix, padding) of a '{}' / '####' pattern or a concrete numbered file.");
+    m.def("match_frame", [](const std::string& prefix, const std::string& suffix, const std::string& name) -> py::object {
+        const auto frame = FramePattern{"", prefix, suffix, 0}.match(name);
+        return frame ? py::object(py::int_(*frame)) : py::object(py::none());
+    }, py::arg("prefix"), py::arg("suffix"), py::arg("name"), "The frame number a file name stands for, or None.");
+    m.def("list_frames", [](const std::string& directory, const std::string& prefix, const std::string& suffix, int padding) {
+        FrameListing listing;
+        {
+            py::gil_scoped_release release;
+            listing = list_frames(FramePattern{directory, prefix, suffix, padding});
+        }
+        return py::make_tuple(listing.frames, listing.duplicates);
+    }, py::arg("directory"), py::arg("prefix"), py::arg("suffix"), py::arg("padding"),
+          "({frame: path}, duplicate notes) of the files of a pattern in its folder.");
     m.def("read_particles", &read_particle_file, py::arg("path"), "Reads a particle file: dict with 'positions' (N, 3) float32 and 'attributes'.");
     m.def("read_mesh", [](const std::string& path) {
         TriMesh mesh;

@@ -1,5 +1,6 @@
 """The command-line tool: single frames, sequences with gaps and broken frames, stats, output formats."""
 import json
+import pathlib
 import shutil
 import subprocess
 
@@ -96,3 +97,20 @@ def test_every_frame_of_the_shared_sequence_passes_the_mesh_check(cli, shared, t
     failed = [(f["frame"], f.get("failed")) for f in report["frames"] if f.get("failed")]
     assert not failed and result.returncode == 0, (failed, result.stderr[-2000:])
     assert all(f["check"]["ok"] for f in report["frames"])
+
+
+@pytest.mark.parametrize("spelling, chosen", [("fluid_{}.vtk", "fluid_7.vtk"), ("fluid_####.vtk", "fluid_0007.vtk")])
+def test_command_line_and_add_on_pick_the_same_file_for_two_spellings_of_a_frame(cli, shared, tmp_path, spelling,
+                                                                                  chosen):
+    # Frame 7 written twice; the spelling of the pattern decides, in every interface (one rule in the core).
+    frames = shared / "splashsurf"
+    shutil.copy(frames / "double_dam_break_frame_01_4732_particles.vtk", tmp_path / "fluid_7.vtk")
+    shutil.copy(frames / "bunny_frame_14_7705_particles.vtk", tmp_path / "fluid_0007.vtk")
+    stats = tmp_path / "stats.json"
+    result = run(cli, "reconstruct", tmp_path / spelling, "-o", tmp_path / "out_{}.ply", "-r", 0.025, "-c", 1.0,
+                 "--stats", stats)
+    assert result.returncode == 0, result.stderr
+    assert "frame 7: fluid_0007.vtk and fluid_7.vtk; using " + chosen in result.stderr
+    assert pathlib.Path(json.loads(stats.read_text())["frames"][0]["input"]).name == chosen
+    from meniscus import sequence
+    assert pathlib.Path(sequence.parse_pattern(str(tmp_path / spelling)).list_frames()[7]).name == chosen
