@@ -162,7 +162,7 @@ std::vector<ParameterSpec> make_schema() {
 
     // ---- output -----------------------------------------------------------------------------------------------
     s.push_back(Spec::flag("output_weights", &P::output_weights, post).group("output").label("Weights Attribute")
-                    .cli("--output-smoothing-weights").cli_style(CliStyle::flag)
+                    .cli("--output-smoothing-weights")
                     .help("Store the feature weights as the vertex attribute 'weights' (0 in splashes, 1 in calm "
                           "water), e.g. to shade foam").done());
 
@@ -175,7 +175,7 @@ std::vector<ParameterSpec> make_schema() {
                     .help("Refuse a frame that would need more memory than this, with the estimate, instead of "
                           "exhausting the machine (automatic: 75 % of the installed memory)").done());
     s.push_back(Spec::flag("skip_invalid", &E::skip_invalid, execution).group("execution").label("Skip Invalid Particles")
-                    .cli("--skip-invalid").cli_style(CliStyle::flag)
+                    .cli("--skip-invalid")
                     .help("Drop particles with NaN or infinite coordinates (with a warning) instead of refusing the "
                           "frame").done());
     return s;

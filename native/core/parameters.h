@@ -60,8 +60,8 @@ struct Parameters {
 
 enum class ParameterType { flag, count, real };
 
-// How the command line spells a value: a number (or the automatic word), on|off, or a flag that sets true.
-enum class CliStyle { value, on_off, flag };
+// How the command line spells a value: a number (or the automatic word), or on|off (a bare switch means on).
+enum class CliStyle { value, on_off };
 
 struct ParameterSpec {
     std::string name;         // Python keyword and Blender property: "smoothing_iterations"

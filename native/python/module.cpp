@@ -260,7 +260,7 @@ int run_cli_in_python(const std::vector<std::string>& arguments) {
 
 py::list schema_to_list() {
     static const char* const kTypes[] = {"flag", "count", "real"};
-    static const char* const kCliStyles[] = {"value", "on_off", "flag"};
+    static const char* const kCliStyles[] = {"value", "on_off"};
     py::list out;
     for (const auto& spec : parameter_schema()) {
         py::dict d;

@@ -19,7 +19,7 @@ class Parameter:
     type: str                 # "flag", "count" or "real"
     label: str                # as Blender shows it
     cli: str                  # command-line flag(s)
-    cli_style: str            # "value", "on_off" or "flag"
+    cli_style: str            # "value" or "on_off" (a bare switch means on)
     unit: str
     help: str
     default: float

@@ -114,3 +114,34 @@ def test_command_line_and_add_on_pick_the_same_file_for_two_spellings_of_a_frame
     assert pathlib.Path(json.loads(stats.read_text())["frames"][0]["input"]).name == chosen
     from meniscus import sequence
     assert pathlib.Path(sequence.parse_pattern(str(tmp_path / spelling)).list_frames()[7]).name == chosen
+
+
+def test_command_lines_from_splashsurfs_readme_run_unchanged(cli, shared, tmp_path):
+    # The benchmark lines of splashsurf's README, on a frame scaled to their radius 0.011 and stored as raw XYZ.
+    positions = meniscus.read_particles(shared / "splashsurf/double_dam_break_frame_26_4732_particles.vtk").positions
+    (positions * (0.011 / 0.025)).astype("<f4").tofile(tmp_path / "canyon_13353401_particles.xyz")
+    for line, output in [
+        ("reconstruct canyon_13353401_particles.xyz -r=0.011 -c=1.5 -l=2.0 -t=0.6 --output-dir=out",
+         "out/canyon_13353401_particles_surface.vtk"),
+        ("reconstruct canyon_13353401_particles.xyz -r=0.011 -c=1.5 -l=2.0 -t=0.6 --subdomain-grid=on",
+         "canyon_13353401_particles_surface.vtk"),
+    ]:
+        result = subprocess.run([cli, *line.split()], capture_output=True, text=True, cwd=tmp_path)
+        assert result.returncode == 0, f"{line}\n{result.stderr}"
+        assert (tmp_path / output).stat().st_size > 10000, output
+
+
+def test_frames_in_parallel_give_the_same_meshes(cli, shared, tmp_path):
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    for number in (30, 31, 32):
+        shutil.copy(shared / f"sequence/double_dam_break_{number:04d}.vtk", frames / f"fluid_{number}.vtk")
+    common = ["-r", "0.025", "-c", "1.0", "-q"]
+    serial = run(cli, "reconstruct", frames / "fluid_{}.vtk", "-o", tmp_path / "a_{}.ply", *common)
+    parallel = run(cli, "reconstruct", frames / "fluid_{}.vtk", "-o", tmp_path / "b_{}.ply", "--mt-files=on",
+                   "--mt-particles=off", "--stats", tmp_path / "stats.json", *common)
+    assert serial.returncode == 0 and parallel.returncode == 0, serial.stderr + parallel.stderr
+    report = json.loads((tmp_path / "stats.json").read_text())
+    assert report["parameters"]["frames_in_parallel"] == 2 and [f["frame"] for f in report["frames"]] == [30, 31, 32]
+    for number in (30, 31, 32):
+        assert (tmp_path / f"a_{number}.ply").read_bytes() == (tmp_path / f"b_{number}.ply").read_bytes()

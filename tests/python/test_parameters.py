@@ -86,8 +86,8 @@ def test_command_line_flags_and_defaults_are_the_schema(cli):
         if p.cli_style == "value" and not p.required:
             default = p.automatic_word if p.automatic == p.default else meniscus._core.format_number(p.default)
             assert re.search(re.escape(p.cli) + r" \S+=" + re.escape(default) + r"\b", help_text), (p.name, default)
-        elif p.cli_style == "on_off":
-            assert f"{p.cli} on|off={'on' if p.default else 'off'}" in help_text, p.name
+        else:
+            assert f"{p.cli} [on|off]={'on' if p.default else 'off'}" in help_text, p.name
 
 
 def test_readme_lists_every_flag():
