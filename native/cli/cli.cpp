@@ -172,7 +172,9 @@ CLI::Option* add_switch(CLI::App& command, const std::string& names, bool& targe
             return true;
         },
         help);
-    option->expected(0, 1)->type_name("[on|off]")->default_str(target ? "on" : "off");
+    // No default_str: CLI11 would hand it to the callback as the value of a bare switch. The default goes in the help.
+    option->expected(0, 1)->type_name("[on|off]");
+    option->description(help + " [default: " + (target ? "on" : "off") + "]");
     return option;
 }
 
@@ -213,8 +215,11 @@ void add_parameter_flags(CLI::App& command, Parameters& parameters) {
         if (spec.cli_style == CliStyle::value) {
             option->type_name(spec.automatic ? "NUMBER|" + spec.automatic_word : "NUMBER");
         } else {
-            // splashsurf's spelling --normals=on and the bare switch --normals (meaning on) both work.
+            // splashsurf's spelling --normals=on and the bare switch --normals (meaning on) both work. No
+            // default_str: CLI11 would pass it as the value of a bare switch; the default goes in the help instead.
             option->expected(0, 1)->type_name("[on|off]");
+            option->description(help + " [default: " + cli_value_text(spec, spec.default_value()) + "]");
+            continue;
         }
         if (spec.required)
             option->required();

@@ -78,16 +78,24 @@ def test_numbers_are_formatted_for_people():
     assert meniscus.parameters.BY_NAME["particle_radius"].problem(0.0) == "must be a number greater than 0, got 0"
 
 
+def _help_entry(help_text, names):
+    """The help of one option: its line and the wrapped lines below it, up to the next option."""
+    lines = help_text.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.strip().startswith(names + " "))
+    end = next((i for i in range(start + 1, len(lines)) if lines[i].strip().startswith("-")), len(lines))
+    return " ".join(line.strip() for line in lines[start:end])
+
+
 def test_command_line_flags_and_defaults_are_the_schema(cli):
     help_text = subprocess.run([cli, "reconstruct", "--help"], capture_output=True, text=True).stdout
     for p in parameters.PARAMETERS:
-        flag = p.cli.split(",")[0]
-        assert flag in help_text, flag
+        entry = _help_entry(help_text, p.cli)
+        assert p.help.split(":")[0] in entry, p.name
         if p.cli_style == "value" and not p.required:
             default = p.automatic_word if p.automatic == p.default else meniscus._core.format_number(p.default)
-            assert re.search(re.escape(p.cli) + r" \S+=" + re.escape(default) + r"\b", help_text), (p.name, default)
-        else:
-            assert f"{p.cli} [on|off]={'on' if p.default else 'off'}" in help_text, p.name
+            assert entry.startswith(f"{p.cli} ") and re.match(r"\S+ \S+=" + re.escape(default) + r"\b", entry), (p.name, entry)
+        elif p.cli_style == "on_off":
+            assert f"[default: {'on' if p.default else 'off'}]" in entry, (p.name, entry)
 
 
 def test_readme_lists_every_flag():
