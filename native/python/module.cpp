@@ -101,6 +101,8 @@ py::dict mesh_to_dict(TriMesh&& mesh) {
     out["vertices"] = to_numpy(std::move(mesh.vertices), {v, 3});
     out["triangles"] = to_numpy(std::move(mesh.triangles), {f, 3});
     out["normals"] = has_normals ? py::object(to_numpy(std::move(mesh.normals), {v, 3})) : py::object(py::none());
+    const py::ssize_t q = static_cast<py::ssize_t>(mesh.num_quads());
+    out["quads"] = to_numpy(std::move(mesh.quads), {q, 4});
     out["attributes"] = attributes_to_dict(std::move(mesh.attributes));
     return out;
 }
@@ -190,7 +192,8 @@ py::dict read_particle_file(const std::string& path) {
     return out;
 }
 
-TriMesh mesh_from_arrays(const py::array& vertices, const py::array& triangles, const py::object& normals, const py::dict& attributes) {
+TriMesh mesh_from_arrays(const py::array& vertices, const py::array& triangles, const py::object& normals, const py::dict& attributes,
+                         const py::object& quads = py::none()) {
     require_float_array(vertices, "vertices", false, 3);
     if (!triangles.dtype().is(py::dtype::of<int32_t>()) || !(triangles.flags() & py::array::c_style) || triangles.ndim() != 2 || triangles.shape(1) != 3)
         throw InputError("triangles must be a C-contiguous int32 array of shape (F, 3)");
@@ -199,9 +202,16 @@ TriMesh mesh_from_arrays(const py::array& vertices, const py::array& triangles, 
     mesh.vertices.assign(v, v + vertices.size());
     const int32_t* t = static_cast<const int32_t*>(triangles.data());
     mesh.triangles.assign(t, t + triangles.size());
-    for (int32_t index : mesh.triangles)
-        if (index < 0 || static_cast<std::size_t>(index) >= mesh.num_vertices())
-            throw InputError("triangles refer to vertex " + std::to_string(index) + " but there are " + std::to_string(mesh.num_vertices()) + " vertices");
+    if (!quads.is_none()) {
+        const py::array q = py::reinterpret_borrow<py::array>(quads);
+        if (!q.dtype().is(py::dtype::of<int32_t>()) || !(q.flags() & py::array::c_style) || q.ndim() != 2 || q.shape(1) != 4)
+            throw InputError("quads must be a C-contiguous int32 array of shape (Q, 4)");
+        mesh.quads.assign(static_cast<const int32_t*>(q.data()), static_cast<const int32_t*>(q.data()) + q.size());
+    }
+    for (const std::vector<int32_t>* faces : {&mesh.triangles, &mesh.quads})
+        for (int32_t index : *faces)
+            if (index < 0 || static_cast<std::size_t>(index) >= mesh.num_vertices())
+                throw InputError("faces refer to vertex " + std::to_string(index) + " but there are " + std::to_string(mesh.num_vertices()) + " vertices");
     if (!normals.is_none()) {
         const py::array n = py::reinterpret_borrow<py::array>(normals);
         require_float_array(n, "normals", false, 3);
@@ -350,11 +360,12 @@ PYBIND11_MODULE(_core, m) {
         return mesh_to_dict(std::move(mesh));
     }, py::arg("path"));
     m.def("write_mesh", [](const std::string& path, const py::array& vertices, const py::array& triangles, const py::object& normals,
-                           const py::dict& attributes) {
-        TriMesh mesh = mesh_from_arrays(vertices, triangles, normals, attributes);
+                           const py::dict& attributes, const py::object& quads) {
+        TriMesh mesh = mesh_from_arrays(vertices, triangles, normals, attributes, quads);
         py::gil_scoped_release release;
         write_mesh(mesh, path);
-    }, py::arg("path"), py::arg("vertices"), py::arg("triangles"), py::arg("normals") = py::none(), py::arg("attributes") = py::dict());
+    }, py::arg("path"), py::arg("vertices"), py::arg("triangles"), py::arg("normals") = py::none(), py::arg("attributes") = py::dict(),
+       py::arg("quads") = py::none());
     m.def("check_mesh", [](const py::array& vertices, const py::array& triangles) {
         TriMesh mesh = mesh_from_arrays(vertices, triangles, py::none(), py::dict());
         MeshCheck check;
