@@ -141,7 +141,12 @@ json quality_json(const MeshQuality& q) {
             {"mean_normal_angle_deg", q.mean_normal_angle_deg},
             {"valence_histogram", q.valence_histogram},
             {"single_vertex_configurations", q.single_vertex_configurations},
-            {"double_vertex_configurations", q.double_vertex_configurations}};
+            {"double_vertex_configurations", q.double_vertex_configurations},
+            {"mean_edge_length", q.mean_edge_length},
+            {"scale_length", q.scale_length},
+            {"hfl_passes", q.hfl_passes},
+            {"hfl", q.hfl},
+            {"heat_bumpiness", q.heat_bumpiness}};
 }
 
 struct ReconstructArgs {
@@ -445,19 +450,26 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
     return failed ? 1 : 0;
 }
 
-int inspect_command(const std::string& mesh_path, const std::string& raw_path, const std::string& json_path, int threads) {
+int inspect_command(const std::string& mesh_path, const std::string& raw_path, const std::string& json_path, double particle_radius,
+                    int threads) {
     const TriMesh mesh = read_mesh(mesh_path);
-    const MeshQuality quality = assess_quality(mesh, threads);
+    // hfL (analysis/scale_metrics.h) at L = 2 r, its passes set by the raw mesh's mean edge length when there is one.
+    const double scale = particle_radius > 0.0 ? 2.0 * particle_radius : 0.0;
+    std::optional<MeshQuality> raw;
+    if (!raw_path.empty()) raw = assess_quality(read_mesh(raw_path), threads, scale);
+    const MeshQuality quality = assess_quality(mesh, threads, scale, raw ? raw->mean_edge_length : 0.0);
     json report;
     report["mesh"] = quality_json(quality);
     report["mesh"]["path"] = mesh_path;
-    std::optional<MeshQuality> raw;
-    if (!raw_path.empty()) {
-        raw = assess_quality(read_mesh(raw_path), threads);
+    if (raw) {
         report["raw"] = quality_json(*raw);
         report["raw"]["path"] = raw_path;
         report["volume_ratio"] = raw->volume != 0.0 ? quality.volume / raw->volume : 0.0;
         report["bumpiness_ratio"] = raw->bumpiness > 0.0 ? quality.bumpiness / raw->bumpiness : 0.0;
+        if (scale > 0.0) {
+            report["hfl_ratio"] = raw->hfl > 0.0 ? quality.hfl / raw->hfl : 0.0;
+            report["heat_bumpiness_ratio"] = raw->heat_bumpiness > 0.0 ? quality.heat_bumpiness / raw->heat_bumpiness : 0.0;
+        }
     }
     auto print = [](const char* title, const MeshQuality& q) {
         std::printf("%s\n", title);
@@ -468,6 +480,8 @@ int inspect_command(const std::string& mesh_path, const std::string& raw_path, c
         for (const auto& c : q.components) (c.volume >= 0 ? positive : negative)++;
         std::printf("  components    %zu (%zu bodies and droplets, %zu enclosed bubbles)\n", q.components.size(), positive, negative);
         std::printf("  bumpiness     %.6g\n", q.bumpiness);
+        if (q.scale_length > 0.0)
+            std::printf("  at L = %.6g   hfL %.6g (%d Taubin passes), heat %.6g\n", q.scale_length, q.hfl, q.hfl_passes, q.heat_bumpiness);
         std::printf("  normal angle  %.3f deg (mean between adjacent faces)\n", q.mean_normal_angle_deg);
         std::printf("  barnacles     %zu single-vertex, %zu double-vertex configurations\n", q.single_vertex_configurations,
                     q.double_vertex_configurations);
@@ -480,6 +494,8 @@ int inspect_command(const std::string& mesh_path, const std::string& raw_path, c
     if (raw) {
         print(raw_path.c_str(), *raw);
         std::printf("ratios (mesh / raw): volume %.4f, bumpiness %.4f\n", report["volume_ratio"].get<double>(), report["bumpiness_ratio"].get<double>());
+        if (scale > 0.0)
+            std::printf("ratios at L = 2 r: hfL %.4f, heat %.4f\n", report["hfl_ratio"].get<double>(), report["heat_bumpiness_ratio"].get<double>());
     }
     if (!json_path.empty()) {
         std::ofstream out(path_from_utf8(json_path));
@@ -533,6 +549,10 @@ int run_cli(const std::vector<std::string>& arguments, const CliHooks& hooks) {
     inspect->add_option("--raw", raw_path, "The raw mesh, for volume and bumpiness ratios");
     inspect->add_option("--json", json_path, "Write the report as JSON");
     inspect->add_option("-n,--threads", inspect_threads, "Threads (0: all cores)");
+    double inspect_radius = 0.0;
+    inspect->add_option("-r,--particle-radius", inspect_radius,
+                        "Particle radius: adds the bumpiness at L = 2 r (hfL, with --raw its ratio; Taubin passes from the raw "
+                        "mesh's mean edge length) and its heat-kernel variant");
 
     // splashsurf's command lines write short options as -r=0.025; CLI11 reads that as the value "=0.025".
     std::vector<std::string> split;
@@ -553,7 +573,7 @@ int run_cli(const std::vector<std::string>& arguments, const CliHooks& hooks) {
     }
     try {
         if (*reconstruct) return reconstruct_command(args, hooks);
-        if (*inspect) return inspect_command(mesh_path, raw_path, json_path, inspect_threads);
+        if (*inspect) return inspect_command(mesh_path, raw_path, json_path, inspect_radius, inspect_threads);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return 2;

@@ -19,7 +19,11 @@
 #include "io/io.h"
 #include "parameters.h"
 #include "pipeline.h"
+#include "analysis/scale_metrics.h"
+#include "mesh/adjacency.h"
+#include "post/heat_smoothing.h"
 #include "post/postprocess.h"
+#include "post/wall_constraints.h"
 
 namespace py = pybind11;
 using namespace meniscus;
@@ -375,12 +379,12 @@ PYBIND11_MODULE(_core, m) {
         }
         return check_to_dict(check);
     }, py::arg("vertices"), py::arg("triangles"));
-    m.def("assess_quality", [](const py::array& vertices, const py::array& triangles, int threads) {
+    m.def("assess_quality", [](const py::array& vertices, const py::array& triangles, int threads, double scale_length, double raw_mean_edge) {
         TriMesh mesh = mesh_from_arrays(vertices, triangles, py::none(), py::dict());
         MeshQuality q;
         {
             py::gil_scoped_release release;
-            q = assess_quality(mesh, threads);
+            q = assess_quality(mesh, threads, scale_length, raw_mean_edge);
         }
         py::dict out;
         out["check"] = check_to_dict(q.check);
@@ -396,6 +400,85 @@ PYBIND11_MODULE(_core, m) {
         out["valence_histogram"] = q.valence_histogram;
         out["single_vertex_configurations"] = q.single_vertex_configurations;
         out["double_vertex_configurations"] = q.double_vertex_configurations;
+        out["mean_edge_length"] = q.mean_edge_length;
+        if (q.scale_length > 0.0) {
+            out["scale_length"] = q.scale_length;
+            out["hfl_passes"] = q.hfl_passes;
+            out["hfl"] = q.hfl;
+            out["heat_bumpiness"] = q.heat_bumpiness;
+        }
         return out;
-    }, py::arg("vertices"), py::arg("triangles"), py::arg("threads") = 0);
+    }, py::arg("vertices"), py::arg("triangles"), py::arg("threads") = 0, py::arg("scale_length") = 0.0, py::arg("raw_mean_edge") = 0.0);
+    // Measures and the smoothing stage on their own, for the benchmarks and tests (bench/smoothing_table.py).
+    m.def("taubin_distance", [](const py::array& vertices, const py::array& triangles, int passes, int threads) {
+        TriMesh mesh = mesh_from_arrays(vertices, triangles, py::none(), py::dict());
+        py::gil_scoped_release release;
+        return taubin_distance(mesh, build_adjacency(mesh, resolve_threads(threads)), passes, threads);
+    }, py::arg("vertices"), py::arg("triangles"), py::arg("passes"), py::arg("threads") = 0);
+    m.def("heat_distance", [](const py::array& vertices, const py::array& triangles, double length, int threads) {
+        TriMesh mesh = mesh_from_arrays(vertices, triangles, py::none(), py::dict());
+        py::gil_scoped_release release;
+        return heat_distance(mesh, build_adjacency(mesh, resolve_threads(threads)), length, threads);
+    }, py::arg("vertices"), py::arg("triangles"), py::arg("length"), py::arg("threads") = 0);
+    m.def("mean_edge_length", [](const py::array& vertices, const py::array& triangles) {
+        TriMesh mesh = mesh_from_arrays(vertices, triangles, py::none(), py::dict());
+        py::gil_scoped_release release;
+        return mean_edge_length(mesh, build_adjacency(mesh, 1), 1);
+    }, py::arg("vertices"), py::arg("triangles"));
+    m.def("component_summary", [](const py::array& vertices, const py::array& triangles) {
+        TriMesh mesh = mesh_from_arrays(vertices, triangles, py::none(), py::dict());
+        ComponentSummary c;
+        {
+            py::gil_scoped_release release;
+            c = component_summary(mesh);
+        }
+        const py::ssize_t n = static_cast<py::ssize_t>(c.volume.size());
+        return py::make_tuple(to_numpy(std::move(c.volume), {n}), to_numpy(std::move(c.centroid), {n, 3}));
+    }, py::arg("vertices"), py::arg("triangles"), "(volume (C,), centroid (C, 3)) per connected component with triangles.");
+    m.def("heat_smooth", [](const py::array& vertices, const py::array& triangles, const py::object& weights, double reach,
+                            double particle_radius, bool local_return, bool volume_correction, int parts, bool grid_return, bool reuse_return, double return_tolerance, double local_scale, const py::object& wall_mask,
+                            const py::object& wall_planes, int threads) {
+        TriMesh mesh = mesh_from_arrays(vertices, triangles, py::none(), py::dict());
+        std::vector<float> w;
+        if (!weights.is_none()) w = weights.cast<std::vector<float>>();
+        WallConstraints walls;
+        if (!wall_mask.is_none()) {
+            walls.mask = wall_mask.cast<std::vector<uint8_t>>();
+            const std::vector<float> planes = wall_planes.cast<std::vector<float>>();
+            if (planes.size() != 6) throw InputError("wall_planes: 6 values (min x, max x, min y, max y, min z, max z)");
+            std::copy(planes.begin(), planes.end(), walls.planes.begin());
+        }
+        HeatSmoothingSettings settings;
+        settings.reach = reach;
+        settings.particle_radius = particle_radius;
+        settings.local_return = local_return;
+        settings.volume_correction = volume_correction;
+        settings.parts = parts;
+        settings.grid_return = grid_return;
+        settings.reuse_return = reuse_return;
+        settings.return_tolerance = return_tolerance;
+        settings.local_scale = local_scale;
+        settings.max_offset = 4.0 * particle_radius;
+        settings.walls = walls.empty() ? nullptr : &walls;
+        HeatSmoothingReport report;
+        {
+            py::gil_scoped_release release;
+            const MeshAdjacency adjacency = build_adjacency(mesh, resolve_threads(threads));
+            report = heat_smooth(mesh, adjacency, w, settings, threads);
+        }
+        py::dict info;
+        info["edge"] = report.edge;
+        info["iterations"] = report.iterations;
+        info["parts"] = report.parts;
+        info["applications"] = report.applications;
+        info["reverted_components"] = report.reverted_components;
+        info["seconds"] = py::dict(py::arg("components") = report.seconds_components, py::arg("flow") = report.seconds_flow,
+                                   py::arg("return") = report.seconds_return, py::arg("correction") = report.seconds_correction);
+        const py::ssize_t n = static_cast<py::ssize_t>(mesh.num_vertices());
+        return py::make_tuple(to_numpy(std::move(mesh.vertices), {n, 3}), info);
+    }, py::arg("vertices"), py::arg("triangles"), py::arg("weights") = py::none(), py::arg("reach") = 0.0, py::arg("particle_radius") = 0.0,
+       py::arg("local_return") = true, py::arg("volume_correction") = true, py::arg("parts") = 0, py::arg("grid_return") = false, py::arg("reuse_return") = false, py::arg("return_tolerance") = 0.0, py::arg("local_scale") = 0.0, py::arg("wall_mask") = py::none(),
+       py::arg("wall_planes") = py::none(), py::arg("threads") = 0,
+       "The default smoothing stage (post/heat_smoothing.h) on a mesh: reach and particle_radius absolute; returns "
+       "(vertices (V, 3) float32, report dict).");
 }

@@ -144,6 +144,25 @@ def check_mesh(mesh: Mesh) -> dict:
     return _core.check_mesh(np.ascontiguousarray(mesh.vertices, dtype=np.float32), mesh.all_triangles())
 
 
-def assess_quality(mesh: Mesh, threads: int = 0) -> dict:
-    """Quality report: check, volume, components, bumpiness, normal angles, valences, barnacle counts."""
-    return _core.assess_quality(np.ascontiguousarray(mesh.vertices, dtype=np.float32), mesh.all_triangles(), int(threads))
+def assess_quality(mesh: Mesh, threads: int = 0, particle_radius: Optional[float] = None, raw: Optional[Mesh] = None) -> dict:
+    """Quality report: check, volume, components, bumpiness, normal angles, valences, barnacle counts, mean edge length.
+
+    With particle_radius, also the bumpiness at L = 2 r: "hfl" (mean distance to the mesh's own Taubin low-pass with
+    round(1.36 (L / e)^2) passes, e the raw mesh's mean edge length when raw is given, else this mesh's own) and
+    "heat_bumpiness" (the same against a heat low-pass of time L^2 / 4, which does not depend on the cube size). With
+    raw as well: "raw" (its report) and the ratios "volume_ratio", "hfl_ratio", "heat_bumpiness_ratio".
+    """
+    def report(m, raw_edge=0.0):
+        return _core.assess_quality(np.ascontiguousarray(m.vertices, dtype=np.float32), m.all_triangles(), int(threads),
+                                    2.0 * float(particle_radius) if particle_radius else 0.0, float(raw_edge))
+    if raw is None:
+        return report(mesh)
+    raw_report = report(raw)
+    out = report(mesh, raw_report["mean_edge_length"])
+    out["raw"] = raw_report
+    out["volume_ratio"] = out["volume"] / raw_report["volume"] if raw_report["volume"] else 0.0
+    out["bumpiness_ratio"] = out["bumpiness"] / raw_report["bumpiness"] if raw_report["bumpiness"] else 0.0
+    if particle_radius:
+        out["hfl_ratio"] = out["hfl"] / raw_report["hfl"] if raw_report["hfl"] else 0.0
+        out["heat_bumpiness_ratio"] = out["heat_bumpiness"] / raw_report["heat_bumpiness"] if raw_report["heat_bumpiness"] else 0.0
+    return out

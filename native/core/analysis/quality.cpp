@@ -5,6 +5,7 @@
 #include <numeric>
 #include <vector>
 
+#include "analysis/scale_metrics.h"
 #include "mesh/adjacency.h"
 #include "base/numbers.h"
 #include "post/postprocess.h"
@@ -57,7 +58,7 @@ inline double tet_volume(const TriMesh& m, const int32_t* t, Vec r) {
 
 }  // namespace
 
-MeshQuality assess_quality(const TriMesh& mesh, int threads) {
+MeshQuality assess_quality(const TriMesh& mesh, int threads, double scale_length, double raw_mean_edge) {
     MeshQuality q;
     q.check = check_mesh(mesh);  // validates the arrays too
     threads = resolve_threads(threads);
@@ -137,6 +138,14 @@ MeshQuality assess_quality(const TriMesh& mesh, int threads) {
             return std::isfinite(d) ? d : 0.0;
         });
         q.bumpiness = used > 0 ? total / double(used) : 0.0;
+    }
+
+    q.mean_edge_length = mean_edge_length(mesh, adj, threads);
+    if (scale_length > 0.0) {
+        q.scale_length = scale_length;
+        q.hfl_passes = hfl_passes(scale_length, raw_mean_edge > 0.0 ? raw_mean_edge : q.mean_edge_length);
+        q.hfl = taubin_distance(mesh, adj, q.hfl_passes, threads);
+        q.heat_bumpiness = heat_distance(mesh, adj, scale_length, threads);
     }
 
     // Mean dihedral deviation: angle between the normals of the two triangles of every manifold edge.

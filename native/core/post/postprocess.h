@@ -77,7 +77,15 @@ struct MeshQuality {
     std::vector<std::size_t> valence_histogram;   // index = valence
     std::size_t single_vertex_configurations = 0;
     std::size_t double_vertex_configurations = 0;
+    double mean_edge_length = 0.0;
+    // Bumpiness at a physical scale (analysis/scale_metrics.h), when assess_quality is given a length L (2 r):
+    double scale_length = 0.0;                    // L
+    int hfl_passes = 0;                           // round(1.36 (L / e)^2), e the raw mesh's mean edge length
+    double hfl = 0.0;                             // mean distance to own Taubin low-pass with hfl_passes pairs
+    double heat_bumpiness = 0.0;                  // mean distance to own heat low-pass of time L^2 / 4
 };
-MeshQuality assess_quality(const TriMesh& mesh, int threads = 0);
+// scale_length > 0 adds the measures at that scale; raw_mean_edge is the raw mesh's mean edge length, which sets the
+// hfL pass count for the raw and the smoothed mesh alike (0: this mesh's own).
+MeshQuality assess_quality(const TriMesh& mesh, int threads = 0, double scale_length = 0.0, double raw_mean_edge = 0.0);
 
 }  // namespace meniscus

@@ -1,0 +1,524 @@
+#include "post/heat_smoothing.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "base/errors.h"
+#include "base/numbers.h"
+#include "base/parallel.h"
+#include "mesh/adjacency.h"
+#include "post/postprocess.h"
+#include "post/volume.h"
+#include "post/wall_constraints.h"
+
+namespace meniscus {
+
+namespace {
+
+constexpr int64_t kBlock = 4096;
+
+double seconds_since(std::chrono::steady_clock::time_point& mark) {
+    const auto now = std::chrono::steady_clock::now();
+    const double s = std::chrono::duration<double>(now - mark).count();
+    mark = now;
+    return s;
+}
+
+// body(begin, end) over consecutive blocks of [0, n): fixed blocks, so per-block sums do not depend on the threads.
+template <class F>
+void for_blocks(int64_t n, int threads, int64_t block, F&& body) {
+    if (n <= 0) return;
+    const int64_t blocks = (n + block - 1) / block;
+    parallel_for(blocks, threads, [&](int64_t b) { body(b * block, std::min(n, (b + 1) * block)); });
+}
+
+// One Chebyshev term: t_out = 2 Y t_in - t_older (the first: t_out = Y t_in), written over t_older (read first).
+// Y = I + w (mean - I) per vertex; coordinates set in `frozen` are left as they are (y = t_in). With ACC the two
+// newest terms go into the sum at once, acc += c_in t_in + c_out t_out (t_in is loaded for the stencil anyway): the
+// accumulator is read and written every second term only.
+template <int D, bool FIRST, bool FROZEN, bool ACC>
+void chebyshev_term(const CsrList& nb, const float* w, const uint8_t* frozen, const float* in, float* older_out, float* acc,
+                    float c_in, float c_out, int threads) {
+    const int64_t nv = static_cast<int64_t>(nb.rows());
+    for_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i) {
+            const int32_t* row = nb.row(i);
+            const int32_t m = nb.size(i);
+            const float* xi = in + D * i;
+            float s[D];
+            for (int d = 0; d < D; ++d) s[d] = 0.0f;
+            for (int32_t k = 0; k < m; ++k) {
+                const float* xj = in + D * static_cast<int64_t>(row[k]);
+                for (int d = 0; d < D; ++d) s[d] += xj[d] - xi[d];
+            }
+            const float step = m > 0 ? (w ? w[i] : 1.0f) / static_cast<float>(m) : 0.0f;
+            for (int d = 0; d < D; ++d) {
+                float y = xi[d] + step * s[d];  // (Y t_in)_i
+                if (FROZEN && (frozen[i] >> d & 1u)) y = xi[d];
+                const float value = FIRST ? y : 2.0f * y - older_out[D * i + d];
+                older_out[D * i + d] = value;
+                if (ACC) acc[D * i + d] += c_in * xi[d] + c_out * value;
+            }
+        }
+    });
+}
+
+template <int D, bool FIRST, bool FROZEN>
+void chebyshev_term(bool accumulate, const CsrList& nb, const float* w, const uint8_t* frozen, const float* in, float* older_out,
+                    float* acc, float c_in, float c_out, int threads) {
+    if (accumulate)
+        chebyshev_term<D, FIRST, FROZEN, true>(nb, w, frozen, in, older_out, acc, c_in, c_out, threads);
+    else
+        chebyshev_term<D, FIRST, FROZEN, false>(nb, w, frozen, in, older_out, acc, c_in, c_out, threads);
+}
+
+template <int D, bool FROZEN>
+int chebyshev_apply(std::vector<float>& x, const CsrList& nb, const float* w, const uint8_t* frozen, const std::vector<double>& c,
+                    int threads) {
+    const int64_t nv = static_cast<int64_t>(nb.rows());
+    const int degree = static_cast<int>(c.size()) - 1;
+    // Positions relative to the centre of their bounding box (small numbers wherever the mesh lies); the result is a
+    // convex combination of the terms (the heat kernel's coefficients are positive), accumulated directly: no stream
+    // of the start values is needed inside the loop.
+    float centre[D];
+    for (int d = 0; d < D; ++d) centre[d] = 0.0f;
+    if (D == 3) {
+        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (int64_t i = 0; i < nv; ++i)
+            for (int d = 0; d < D; ++d) lo[d] = std::min(lo[d], x[D * i + d]), hi[d] = std::max(hi[d], x[D * i + d]);
+        for (int d = 0; d < D; ++d) centre[d] = 0.5f * lo[d] + 0.5f * hi[d];
+    }
+    std::vector<float> older(x.size()), current(x.size()), acc(x.size());
+    const float c0 = static_cast<float>(c[0]);
+    for_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i)
+            for (int d = 0; d < D; ++d) {
+                const float t = x[D * i + d] - centre[d];
+                older[D * i + d] = t;
+                acc[D * i + d] = c0 * t;
+            }
+    });
+    // Term k is added together with term k - 1 when k is even, alone when it is the last and odd.
+    auto coefficient = [&](int k) { return static_cast<float>(c[static_cast<std::size_t>(k)]); };
+    chebyshev_term<D, true, FROZEN>(degree == 1, nb, w, frozen, older.data(), current.data(), acc.data(), 0.0f, coefficient(1), threads);
+    for (int k = 2; k <= degree; ++k) {
+        const bool even = k % 2 == 0;
+        chebyshev_term<D, false, FROZEN>(even || k == degree, nb, w, frozen, current.data(), older.data(), acc.data(),
+                                         even ? coefficient(k - 1) : 0.0f, coefficient(k), threads);
+        older.swap(current);
+    }
+    for_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i) {
+            if (nb.size(i) == 0 || (w && w[i] == 0.0f)) continue;  // not moved: keeps its bits
+            for (int d = 0; d < D; ++d) x[D * i + d] = centre[d] + acc[D * i + d];
+        }
+    });
+    return degree;
+}
+
+// Per-component sums of value(t) over the triangles (a triangle counts for its first corner's component), in fixed
+// blocks added in order: the same bits for any thread count.
+template <class Value>
+std::vector<double> per_component_sum(const TriMesh& mesh, const std::vector<int32_t>& labels, int32_t count, int threads,
+                                      const Value& value) {
+    const int64_t nt = static_cast<int64_t>(mesh.num_triangles());
+    constexpr int64_t block = int64_t(1) << 16;
+    std::vector<double> total(static_cast<std::size_t>(count), 0.0);
+    const int64_t blocks = (nt + block - 1) / block;
+    if (blocks <= 1 || blocks * count > (int64_t(1) << 22)) {
+        for (int64_t t = 0; t < nt; ++t) total[labels[mesh.triangles[3 * t]]] += value(t);
+        return total;
+    }
+    std::vector<double> partial(static_cast<std::size_t>(blocks * count), 0.0);
+    parallel_for(blocks, threads, [&](int64_t b) {
+        double* row = partial.data() + b * count;
+        for (int64_t t = b * block; t < std::min(nt, (b + 1) * block); ++t) row[labels[mesh.triangles[3 * t]]] += value(t);
+    });
+    for (int64_t b = 0; b < blocks; ++b)
+        for (int32_t k = 0; k < count; ++k) total[k] += partial[b * count + k];
+    return total;
+}
+
+void apply_walls(const WallConstraints* walls, TriMesh& mesh) {
+    if (walls && !walls->empty()) walls->apply(mesh.vertices.data(), mesh.num_vertices());
+}
+
+// Newton steps along the vertex normals (in mesh.normals), offsets s_c * amount_i, until each component's volume is
+// its target (capped at max_offset); walls applied after each step.
+void correct_component_volumes(TriMesh& mesh, const std::vector<int32_t>& labels, const std::vector<double>& target,
+                               const std::vector<float>& amount, double max_offset, const WallConstraints* walls, int threads) {
+    const int32_t count = static_cast<int32_t>(target.size());
+    if (count == 0 || mesh.num_triangles() == 0) return;
+    std::vector<double> applied(static_cast<std::size_t>(count), 0.0);
+    const int32_t* tris = mesh.triangles.data();
+    for (int step = 0; step < 3; ++step) {
+        const std::vector<double> volume = component_volumes(mesh, labels, count, threads);
+        bool converged = true;
+        for (int32_t c = 0; c < count && converged; ++c) converged = std::fabs(target[c] - volume[c]) <= 1e-5 * std::fabs(target[c]);
+        if (converged) break;
+        // d volume / d s = sum_i amount_i A_i (A_i a third of the incident triangles' areas).
+        const std::vector<double> rate = per_component_sum(mesh, labels, count, threads, [&](int64_t t) {
+            const int32_t* tri = tris + 3 * t;
+            const float *a = &mesh.vertices[3 * static_cast<std::size_t>(tri[0])], *b = &mesh.vertices[3 * static_cast<std::size_t>(tri[1])],
+                        *c = &mesh.vertices[3 * static_cast<std::size_t>(tri[2])];
+            const double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
+            const double v[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
+            const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+            const double third = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / 6.0;
+            double sum = 0.0;
+            for (int i = 0; i < 3; ++i) sum += third * (amount.empty() ? 1.0 : double(amount[tri[i]]));
+            return sum;
+        });
+        std::vector<double> offset(static_cast<std::size_t>(count), 0.0);
+        bool any = false;
+        for (int32_t c = 0; c < count; ++c) {
+            if (!(rate[c] > 0.0)) continue;
+            double s = (target[c] - volume[c]) / rate[c];
+            s = std::min(std::max(applied[c] + s, -max_offset), max_offset) - applied[c];
+            if (!std::isfinite(s)) continue;
+            applied[c] += s;
+            offset[c] = s;
+            any = any || s != 0.0;
+        }
+        if (!any) break;
+        for_blocks(static_cast<int64_t>(mesh.num_vertices()), threads, kBlock, [&](int64_t begin, int64_t end) {
+            for (int64_t v = begin; v < end; ++v) {
+                const double s = offset[labels[v]] * (amount.empty() ? 1.0 : double(amount[v]));
+                if (s == 0.0) continue;
+                for (int k = 0; k < 3; ++k)
+                    mesh.vertices[3 * v + k] = static_cast<float>(mesh.vertices[3 * v + k] + s * mesh.normals[3 * v + k]);
+            }
+        });
+        apply_walls(walls, mesh);
+    }
+}
+
+
+// Unit area-weighted vertex normals and vertex areas (a third of the incident triangles' areas) in one pass.
+void normals_and_areas(const TriMesh& mesh, const MeshAdjacency& adjacency, std::vector<float>& normals, std::vector<float>& areas,
+                       int threads) {
+    const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
+    const CsrList& vt = adjacency.vertex_triangles;
+    normals.resize(mesh.vertices.size());
+    areas.resize(static_cast<std::size_t>(nv));
+    for_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t v = begin; v < end; ++v) {
+            double sum[3] = {0.0, 0.0, 0.0}, largest[3] = {0.0, 0.0, 1.0}, largest_norm = 0.0, area = 0.0;
+            for (int64_t k = vt.begin(v); k < vt.end(v); ++k) {
+                const int32_t* t = mesh.triangles.data() + 3 * static_cast<int64_t>(vt.items[k]);
+                const float *a = &mesh.vertices[3 * static_cast<int64_t>(t[0])], *b = &mesh.vertices[3 * static_cast<int64_t>(t[1])],
+                            *c = &mesh.vertices[3 * static_cast<int64_t>(t[2])];
+                const double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
+                const double w[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
+                const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+                const double norm2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+                if (!std::isfinite(norm2)) continue;
+                sum[0] += n[0], sum[1] += n[1], sum[2] += n[2];
+                area += std::sqrt(norm2) / 6.0;
+                if (norm2 > largest_norm) largest_norm = norm2, largest[0] = n[0], largest[1] = n[1], largest[2] = n[2];
+            }
+            double l = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+            const double* dir = sum;
+            if (!(l > 0.0)) dir = largest, l = std::sqrt(largest[0] * largest[0] + largest[1] * largest[1] + largest[2] * largest[2]);
+            for (int k = 0; k < 3; ++k) normals[3 * v + k] = static_cast<float>(l > 0.0 ? dir[k] / l : (k == 2 ? 1.0 : 0.0));
+            areas[v] = static_cast<float>(area);
+        }
+    });
+}
+
+// Weighted Gaussian average of a per-vertex scalar over space: value_i <- w_i (G * (A w v))(x_i) / (G * (A w))(x_i)
+// (A the vertex area, w the smoothing weight: what the moving vertices lost goes back to the moving vertices, in
+// proportion to how much they move; a droplet of weight 0 beside the pool neither gives nor takes), G of
+// variance sigma^2 / 2 per axis (the heat time sigma^2 / 4 of the graph filter it replaces). Splatted trilinearly to a
+// node grid of spacing sigma / 3, blurred separably there, interpolated back: a few passes over the vertices instead
+// of ~30 graph applications. Deterministic: vertices are bucketed by z layer in index order and the layers splat in
+// two phases (even, odd), so each node's sum has a fixed order. Returns false, changing nothing, when the grid would
+// be much larger than the mesh (a sparse scene): the caller then uses the graph filter.
+bool grid_average(const std::vector<float>& positions, const std::vector<float>& areas, const std::vector<float>& weights,
+                  std::vector<float>& value, double sigma, int threads) {
+    const int64_t nv = static_cast<int64_t>(value.size());
+    if (nv == 0 || !(sigma > 0.0)) return false;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t i = 0; i < nv; ++i)
+        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], double(positions[3 * i + k])), hi[k] = std::max(hi[k], double(positions[3 * i + k]));
+    const double h = sigma / 3.0;
+    int64_t n[3];
+    for (int k = 0; k < 3; ++k) n[k] = static_cast<int64_t>(std::floor((hi[k] - lo[k]) / h)) + 2;
+    const int64_t nodes = n[0] * n[1] * n[2];
+    if (!(nodes > 0) || nodes > std::max<int64_t>(int64_t(1) << 21, 2 * nv)) return false;
+    // Per vertex: base node and fractions.
+    std::vector<int32_t> base(3 * static_cast<std::size_t>(nv));
+    std::vector<float> frac(3 * static_cast<std::size_t>(nv));
+    for_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i)
+            for (int k = 0; k < 3; ++k) {
+                const double u = (double(positions[3 * i + k]) - lo[k]) / h;
+                const int64_t c = std::min<int64_t>(std::max<int64_t>(static_cast<int64_t>(std::floor(u)), 0), n[k] - 2);
+                base[3 * i + k] = static_cast<int32_t>(c);
+                frac[3 * i + k] = static_cast<float>(std::min(std::max(u - double(c), 0.0), 1.0));
+            }
+    });
+    // Bucket by z layer, in vertex order.
+    std::vector<int64_t> layer_start(static_cast<std::size_t>(n[2]) + 1, 0);
+    for (int64_t i = 0; i < nv; ++i) ++layer_start[base[3 * i + 2] + 1];
+    for (int64_t z = 0; z < n[2]; ++z) layer_start[z + 1] += layer_start[z];
+    std::vector<int32_t> order(static_cast<std::size_t>(nv));
+    {
+        std::vector<int64_t> fill(layer_start.begin(), layer_start.end() - 1);
+        for (int64_t i = 0; i < nv; ++i) order[fill[base[3 * i + 2]]++] = static_cast<int32_t>(i);
+    }
+    auto node = [&](int64_t x, int64_t y, int64_t z) { return (z * n[1] + y) * n[0] + x; };
+    std::vector<double> num(static_cast<std::size_t>(nodes), 0.0), den(static_cast<std::size_t>(nodes), 0.0);
+    for (int phase = 0; phase < 2; ++phase) {
+        const int64_t layers = (n[2] - 1 - phase + 1) / 2;
+        parallel_for(layers, threads, [&](int64_t l) {
+            const int64_t z = 2 * l + phase;
+            for (int64_t o = layer_start[z]; o < layer_start[z + 1]; ++o) {
+                const int64_t i = order[o];
+                const int64_t bx = base[3 * i], by = base[3 * i + 1], bz = base[3 * i + 2];
+                const double fx = frac[3 * i], fy = frac[3 * i + 1], fz = frac[3 * i + 2];
+                const double a = double(areas[i]) * (weights.empty() ? 1.0 : double(weights[i])), av = a * double(value[i]);
+                for (int dz = 0; dz < 2; ++dz)
+                    for (int dy = 0; dy < 2; ++dy)
+                        for (int dx = 0; dx < 2; ++dx) {
+                            const double wgt = (dx ? fx : 1.0 - fx) * (dy ? fy : 1.0 - fy) * (dz ? fz : 1.0 - fz);
+                            const int64_t g = node(bx + dx, by + dy, bz + dz);
+                            num[g] += wgt * av;
+                            den[g] += wgt * a;
+                        }
+            }
+        });
+    }
+    // Separable Gaussian: the trilinear splat and gather add a variance of h^2 / 6 each per axis.
+    const double variance = std::max(0.5 * sigma * sigma - h * h / 3.0, 0.25 * h * h) / (h * h);
+    const int radius = static_cast<int>(std::ceil(3.0 * std::sqrt(variance)));
+    std::vector<double> kernel(2 * static_cast<std::size_t>(radius) + 1);
+    double total = 0.0;
+    for (int k = -radius; k <= radius; ++k) total += kernel[k + radius] = std::exp(-0.5 * k * k / variance);
+    for (double& k : kernel) k /= total;
+    std::vector<double> scratch(static_cast<std::size_t>(nodes));
+    for (int axis = 0; axis < 3; ++axis) {
+        const int64_t stride = axis == 0 ? 1 : (axis == 1 ? n[0] : n[0] * n[1]);
+        const int64_t length = n[axis];
+        const int64_t lines = nodes / length;
+        for (std::vector<double>* field : {&num, &den}) {
+            const double* in = field->data();
+            double* out = scratch.data();
+            parallel_for(lines, threads, [&](int64_t line) {
+                // The line's first node: line enumerates the other two axes.
+                int64_t first;
+                if (axis == 0) first = line * n[0];
+                else if (axis == 1) first = (line / n[0]) * n[0] * n[1] + line % n[0];
+                else first = line;
+                for (int64_t i = 0; i < length; ++i) {
+                    double s = 0.0;
+                    const int64_t from = std::max<int64_t>(-radius, -i), to = std::min<int64_t>(radius, length - 1 - i);
+                    for (int64_t k = from; k <= to; ++k) s += kernel[k + radius] * in[first + (i + k) * stride];
+                    out[first + i * stride] = s;
+                }
+            }, 64);
+            field->swap(scratch);
+        }
+    }
+    for_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i) {
+            const int64_t bx = base[3 * i], by = base[3 * i + 1], bz = base[3 * i + 2];
+            const double fx = frac[3 * i], fy = frac[3 * i + 1], fz = frac[3 * i + 2];
+            double a = 0.0, b = 0.0;
+            for (int dz = 0; dz < 2; ++dz)
+                for (int dy = 0; dy < 2; ++dy)
+                    for (int dx = 0; dx < 2; ++dx) {
+                        const double wgt = (dx ? fx : 1.0 - fx) * (dy ? fy : 1.0 - fy) * (dz ? fz : 1.0 - fz);
+                        const int64_t g = node(bx + dx, by + dy, bz + dz);
+                        a += wgt * num[g];
+                        b += wgt * den[g];
+                    }
+            const double w = weights.empty() ? 1.0 : double(weights[i]);
+            value[i] = b > 0.0 ? static_cast<float>(w * a / b) : 0.0f;
+        }
+    });
+    return true;
+}
+
+}  // namespace
+
+double smoothing_reach_of(int iterations, double beta, double cube_size, bool coarse_floor) {
+    if (iterations <= 0 || !(beta > 0.0)) return 0.0;
+    const double steps = std::sqrt(double(iterations) * beta) * kEdgePerCube;
+    return steps * (coarse_floor ? std::max(kReferenceCube, cube_size) : kReferenceCube);
+}
+
+double rms_edge_length(const TriMesh& mesh, const MeshAdjacency& adjacency, int threads) {
+    const CsrList& nb = adjacency.vertex_neighbours;
+    const int64_t nv = static_cast<int64_t>(nb.rows());
+    const int64_t blocks = (nv + kBlock - 1) / kBlock;
+    std::vector<double> sum(static_cast<std::size_t>(std::max<int64_t>(blocks, 0)), 0.0), count(sum.size(), 0.0);
+    parallel_for(blocks, threads, [&](int64_t b) {
+        double s = 0.0, c = 0.0;
+        for (int64_t i = b * kBlock; i < std::min(nv, (b + 1) * kBlock); ++i) {
+            const float* xi = &mesh.vertices[3 * i];
+            for (int64_t k = nb.begin(i); k < nb.end(i); ++k) {
+                const int32_t j = nb.items[k];
+                if (j <= i) continue;  // each edge once
+                const float* xj = &mesh.vertices[3 * static_cast<int64_t>(j)];
+                const double dx = double(xj[0]) - xi[0], dy = double(xj[1]) - xi[1], dz = double(xj[2]) - xi[2];
+                s += dx * dx + dy * dy + dz * dz;
+                c += 1.0;
+            }
+        }
+        sum[b] = s, count[b] = c;
+    });
+    double s = 0.0, c = 0.0;
+    for (int64_t b = 0; b < blocks; ++b) s += sum[b], c += count[b];
+    return c > 0.0 ? std::sqrt(s / c) : 0.0;
+}
+
+std::vector<double> heat_coefficients(double n, double tolerance) {
+    if (!(n > 0.0)) return {1.0};
+    // The coefficients of exp(N (y - 1)) (2 e^-N I_k(N), positive) decay like exp(-k^2 / (2 N)).
+    const int max_degree = static_cast<int>(std::ceil(std::sqrt(2.0 * n * 12.0))) + 8;
+    const int nodes = 2 * max_degree + 16;
+    std::vector<double> f(static_cast<std::size_t>(nodes));
+    for (int j = 0; j < nodes; ++j) f[j] = std::exp(n * (std::cos(kPi * (j + 0.5) / nodes) - 1.0));
+    std::vector<double> c(static_cast<std::size_t>(max_degree) + 1, 0.0);
+    for (int k = 0; k <= max_degree; ++k) {
+        double s = 0.0;
+        for (int j = 0; j < nodes; ++j) s += f[j] * std::cos(kPi * k * (j + 0.5) / nodes);
+        c[k] = (k == 0 ? 1.0 : 2.0) * s / nodes;
+    }
+    int degree = max_degree;
+    double tail = 0.0;
+    while (degree > 1 && tail + std::fabs(c[degree]) < tolerance) tail += std::fabs(c[degree--]);
+    c.resize(static_cast<std::size_t>(degree) + 1);
+    double rest = 0.0;
+    for (int k = 1; k <= degree; ++k) rest += c[k];
+    c[0] = 1.0 - rest;  // f(1) = sum c_k T_k(1) = 1: constants exact
+    return c;
+}
+
+int heat_filter(std::vector<float>& x, int dims, const MeshAdjacency& adjacency, const std::vector<float>& weights, double n,
+                double tolerance, int threads, const std::vector<uint8_t>* frozen) {
+    const CsrList& nb = adjacency.vertex_neighbours;
+    const std::size_t nv = nb.rows();
+    if (dims != 1 && dims != 3) throw InputError("heat_filter: 1 or 3 values per vertex");
+    if (x.size() != static_cast<std::size_t>(dims) * nv) throw InputError("heat_filter: the adjacency does not belong to these values");
+    if (!weights.empty() && weights.size() != nv) throw InputError("heat_filter: one weight per vertex expected");
+    if (frozen && !frozen->empty() && frozen->size() != nv) throw InputError("heat_filter: one wall mask per vertex expected");
+    const std::vector<double> c = heat_coefficients(n, tolerance);
+    if (c.size() < 2 || nv == 0) return 0;
+    const float* w = weights.empty() ? nullptr : weights.data();
+    const uint8_t* f = frozen && !frozen->empty() ? frozen->data() : nullptr;
+    if (dims == 3) return f ? chebyshev_apply<3, true>(x, nb, w, f, c, threads) : chebyshev_apply<3, false>(x, nb, w, nullptr, c, threads);
+    return f ? chebyshev_apply<1, true>(x, nb, w, f, c, threads) : chebyshev_apply<1, false>(x, nb, w, nullptr, c, threads);
+}
+
+HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& weights_in,
+                                const HeatSmoothingSettings& settings, int threads) {
+    validate_mesh_arrays(mesh, "heat_smooth");
+    HeatSmoothingReport report;
+    const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
+    if (adjacency.vertex_neighbours.rows() != mesh.num_vertices()) throw InputError("heat_smooth: the adjacency does not belong to this mesh");
+    if (!weights_in.empty() && weights_in.size() != mesh.num_vertices())
+        throw InputError("heat_smooth: got " + std::to_string(weights_in.size()) + " weights for " + std::to_string(nv) + " vertices");
+    if (!(settings.reach > 0.0) || nv == 0) return report;
+    const double radius = settings.particle_radius > 0.0 ? settings.particle_radius : settings.reach / 4.0;
+    for (float v : mesh.vertices)
+        if (!std::isfinite(v)) throw InputError("heat_smooth: the mesh has a non-finite vertex coordinate");
+    // Weights are documented as [0, 1]: clamp rounding (1.0000001) so no step overshoots; NaN would spread everywhere.
+    std::vector<float> weights(weights_in.size());
+    for (std::size_t i = 0; i < weights_in.size(); ++i) {
+        if (std::isnan(weights_in[i])) throw InputError("heat_smooth: weight of vertex " + std::to_string(i) + " is NaN");
+        weights[i] = std::fmin(1.0f, std::fmax(0.0f, weights_in[i]));
+    }
+    const WallConstraints* walls = settings.walls && !settings.walls->empty() ? settings.walls : nullptr;
+    std::vector<uint8_t> frozen;
+    if (walls) {
+        if (walls->mask.size() != mesh.num_vertices()) throw InputError("heat_smooth: the wall mask does not belong to this mesh");
+        frozen.resize(walls->mask.size());
+        for (std::size_t v = 0; v < frozen.size(); ++v) {
+            uint8_t bits = 0;
+            for (int f = 0; f < 6; ++f)
+                if (walls->mask[v] >> f & 1u) bits |= static_cast<uint8_t>(1u << (f / 2));
+            frozen[v] = bits;
+        }
+        apply_walls(walls, mesh);
+    }
+
+    report.edge = rms_edge_length(mesh, adjacency, threads);
+    if (!(report.edge > 0.0)) return report;
+    report.iterations = std::min((settings.reach / report.edge) * (settings.reach / report.edge), 1.0e5);
+    const double time = 0.25 * settings.reach * settings.reach;
+    report.parts = settings.parts > 0 ? settings.parts
+                                      : std::max(1, static_cast<int>(std::ceil(time / (kPartTime * radius * radius) - 0.05)));
+
+    // Components: for the exact final volume and for the guard against collapsed blobs (a few vertices around one
+    // grid point that a plain flow would pull into a point). Not needed when neither applies.
+    auto mark = std::chrono::steady_clock::now();
+    const bool guard = settings.volume_correction || weights.empty();
+    int32_t components = 0;
+    std::vector<int32_t> labels;
+    std::vector<double> volumes;
+    std::vector<float> start;
+    if (guard) {
+        labels = component_labels(mesh, &components);
+        volumes = component_volumes(mesh, labels, components, threads);
+        start = mesh.vertices;
+    }
+    report.seconds_components += seconds_since(mark);
+
+    const double local_scale = (settings.local_scale > 0.0 ? settings.local_scale : kLocalScale) * radius;
+    const double return_iterations = std::pow(local_scale / report.edge, 2.0);
+    std::vector<float> before, offset, normals, areas;
+    if (settings.local_return) offset.resize(static_cast<std::size_t>(nv));
+    for (int part = 0; part < report.parts; ++part) {
+        if (settings.local_return) before = mesh.vertices;
+        report.applications += heat_filter(mesh.vertices, 3, adjacency, weights, report.iterations / report.parts, kPositionTolerance,
+                                           threads, walls ? &frozen : nullptr);
+        apply_walls(walls, mesh);
+        report.seconds_flow += seconds_since(mark);
+        if (!settings.local_return) continue;
+        // The part's normal displacement, low-passed over the surface, goes back along the normals.
+        normals_and_areas(mesh, adjacency, normals, areas, threads);  // of a smoothed surface: smooth enough as they are
+        if (part == 0 || !settings.reuse_return) {
+            for_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+                for (int64_t i = begin; i < end; ++i) {
+                    float d = 0.0f;
+                    for (int k = 0; k < 3; ++k) d += (mesh.vertices[3 * i + k] - before[3 * i + k]) * normals[3 * i + k];
+                    offset[i] = d;
+                }
+            });
+            if (!(settings.grid_return && grid_average(mesh.vertices, areas, weights, offset, local_scale, threads)))
+                report.applications += heat_filter(offset, 1, adjacency, {}, return_iterations,
+                                                   settings.return_tolerance > 0.0 ? settings.return_tolerance : kReturnTolerance, threads);
+        }
+        for_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+            for (int64_t i = begin; i < end; ++i) {
+                const float back = offset[i];
+                if (back == 0.0f) continue;
+                for (int k = 0; k < 3; ++k) mesh.vertices[3 * i + k] -= back * normals[3 * i + k];
+            }
+        });
+        apply_walls(walls, mesh);
+        report.seconds_return += seconds_since(mark);
+    }
+
+    if (settings.volume_correction) {
+        // Along smoothed normals (offsets along raw vertex normals would print the triangulation's noise back in);
+        // the offsets are tiny, so these normals are the output's normals too.
+        compute_area_weighted_normals(mesh, adjacency, threads);
+        smooth_normals(mesh, adjacency, settings.normal_iterations, threads);
+        report.normals_left = true;
+        correct_component_volumes(mesh, labels, volumes, weights, settings.max_offset > 0.0 ? settings.max_offset : 4.0 * radius, walls,
+                                  threads);
+    }
+    if (guard) {
+        report.reverted_components = revert_collapsed_components(mesh, start, labels, components, volumes, threads);
+        if (report.reverted_components) report.normals_left = false;
+    }
+    report.seconds_correction += seconds_since(mark);
+    return report;
+}
+
+}  // namespace meniscus

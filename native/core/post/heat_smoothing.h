@@ -1,0 +1,105 @@
+// Smoothing of a physical reach that holds volume where it is (issue 12; beyond the paper's Eq. 5).
+//
+// The paper's explicit weighted Laplacian moves a vertex a fraction of an edge per iteration, so a fixed iteration
+// count reaches less far the finer the cubes (and further the coarser). Here the smoothing is a heat flow of a fixed
+// physical time: the weighted umbrella operator Y = I + W (mean - I) (one beta = 1 Jacobi step; eigenvalues in
+// [-1, 1]) is applied as a Chebyshev expansion of exp(N (y - 1)), N = (reach / e)^2 with e the mesh's RMS edge length.
+// N explicit steps are a heat time N e^2 / 4, so the heat time is reach^2 / 4 at every cube size, for about
+// 4 sqrt(N) operator applications instead of N.
+//
+// Local volume: the flow runs in parts of heat time <= kPartTime r^2. After each part the normal component of the
+// part's displacement is low-passed over the surface (reach kLocalScale r) and taken back along the normals. Removing
+// a particle's bump is a displacement of alternating sign and averages out; the shrinkage of a tube, sheet, crest or
+// droplet is of one sign across the feature and is returned where it happened, before it can collapse anything;
+// a gap's widening is returned the same way, so gaps do not close. A final per-component correction (Newton steps
+// along the smoothed normals, scaled by the feature weights) makes each component's volume exact; since nothing has
+// collapsed, its offsets are of the order of 0.01 r.
+//
+// Walls (wall_constraints.h): a vertex on a wall keeps its coordinate along the wall's normal inside the flow (the
+// operator leaves that coordinate as it is) and WallConstraints::apply() runs after every step that moves vertices
+// (each part of the flow, each local return, each volume-correction step), so it slides along the wall.
+//
+// Everything is per-vertex Jacobi arithmetic over sorted CSR rows and sums in fixed blocks: the result is the same
+// bits for any thread count.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "mesh/mesh.h"
+
+namespace meniscus {
+
+struct MeshAdjacency;
+struct WallConstraints;
+
+// RMS edge length of a decimated marching-cubes mesh per cube edge (1.05-1.09 on the shared frames at c = 0.25-1.0):
+// turns an iteration count into the reach it has at a cube size.
+constexpr double kEdgePerCube = 1.07;
+// The cube size (in r) at which the iteration count keeps its explicit meaning: N iterations reach what N explicit
+// iterations reach at c = 0.5 (splashsurf's and the paper's usual cube size), at every finer cube size too.
+constexpr double kReferenceCube = 0.5;
+// Whether the pipeline uses the coarse floor of smoothing_reach_of: at cubes coarser than the reference the reach is
+// what the iterations reach explicitly there (as the paper's smoothing does), never less. Measured on the sequence
+// (slope flicker / pysplashsurf's): c = 1.0: 1.06 at 4 r without the floor, 0.92 at 5.35 r, 0.82 at 8 r; c = 0.75:
+// 0.88 at 4 r, 0.73 at 6 r. Coarse marching cubes alias from frame to frame; the floor smooths that as the paper did.
+constexpr bool kSmoothingCoarseFloor = true;
+// Largest heat time of one part of the flow, in r^2 (a tube of radius 1.5 r keeps most of its radius within one
+// part, so the local return finds it).
+constexpr double kPartTime = 2.5;
+// Reach of the low-pass of the normal displacement that is returned after each part, in r. Smaller returns the
+// particles' bumps too (measured: 1 r returns them all), larger returns a tube's shrinkage less locally.
+constexpr double kLocalScale = 6.0;
+// Chebyshev tails dropped (fraction of a displacement): positions; the returned displacement.
+constexpr double kPositionTolerance = 1e-3;
+constexpr double kReturnTolerance = 1e-2;
+
+// The reach (in r) of `iterations` explicit steps of strength beta at the reference cube size. With a coarse floor,
+// at cube sizes above the reference the reach is never less than what the same steps reach on this mesh
+// (sqrt(iterations * beta) * kEdgePerCube * cube_size).
+double smoothing_reach_of(int iterations, double beta, double cube_size, bool coarse_floor);
+
+// RMS edge length over the mesh's edges (deterministic sum).
+double rms_edge_length(const TriMesh& mesh, const MeshAdjacency& adjacency, int threads);
+
+// Chebyshev coefficients of exp(N (y - 1)) on [-1, 1], truncated where the tail adds up to less than `tolerance`,
+// renormalised so that they sum to 1 (constants kept).
+std::vector<double> heat_coefficients(double n, double tolerance);
+
+// x <- exp(N (Y - I)) x in place, `dims` (1 or 3) floats per vertex; weights (per vertex in [0, 1]) may be empty (1
+// everywhere). frozen: optional, per vertex a bit mask of coordinates (bit k: coordinate k) the operator leaves as
+// they are (walls). Vertices of weight 0 or without neighbours keep their values bit for bit. Returns the number of
+// operator applications.
+int heat_filter(std::vector<float>& x, int dims, const MeshAdjacency& adjacency, const std::vector<float>& weights, double n,
+                double tolerance, int threads, const std::vector<uint8_t>* frozen = nullptr);
+
+struct HeatSmoothingSettings {
+    double reach = 0.0;             // absolute (scene units): heat time reach^2 / 4
+    double particle_radius = 0.0;   // r: the unit of the part time and the local scale
+    bool local_return = true;       // return the low-passed normal displacement after each part
+    bool volume_correction = true;  // final exact per-component volume (Newton along the smoothed normals)
+    int normal_iterations = 10;     // smoothing of the correction's normals (Eq. 12); they are left in mesh.normals
+    double max_offset = 0.0;        // cap of the correction's offset (absolute; 0: 4 r)
+    int parts = 0;                  // 0: automatic (heat time <= kPartTime r^2 each)
+    bool grid_return = false;       // research: low-pass the returned displacement on a spatial grid (dropped)
+    bool reuse_return = false;      // research: return part 1's low-passed displacement again after the later parts
+    double return_tolerance = 0.0;  // research: 0 is kReturnTolerance
+    double local_scale = 0.0;       // research: reach of the return's low-pass in r; 0 is kLocalScale
+    const WallConstraints* walls = nullptr;
+};
+
+struct HeatSmoothingReport {
+    double edge = 0.0;                // RMS edge length used
+    double iterations = 0.0;          // equivalent explicit iterations N
+    int parts = 0;
+    int applications = 0;             // operator applications (position flow and returned displacement)
+    bool normals_left = false;        // mesh.normals hold the correction's smoothed normals (output-ready)
+    std::size_t reverted_components = 0;  // collapsed components given their positions back (guard)
+    // Seconds spent: components (labels, volumes), flow, local return (normals, low-pass, move), final correction.
+    double seconds_components = 0.0, seconds_flow = 0.0, seconds_return = 0.0, seconds_correction = 0.0;
+};
+
+// The whole stage. weights may be empty (plain heat flow).
+HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& weights,
+                                const HeatSmoothingSettings& settings, int threads);
+
+}  // namespace meniscus
