@@ -7,6 +7,7 @@
 #include "base/errors.h"
 #include "mesh/adjacency.h"
 #include "base/parallel.h"
+#include "post/heat_smoothing.h"
 #include "post/postprocess.h"
 #include "surface/reconstruction.h"
 #include "post/volume.h"
@@ -94,7 +95,27 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
     }
     if (post.output_weights) mesh.attributes.push_back({"weights", 1, weights});
     bool normals_from_restoration = false;  // volume restoration left the normals the output asks for
-    if (post.smoothing_iterations > 0) {
+    if (post.smoothing_iterations > 0 && !post.smoothing_explicit) {
+        // Heat flow of a physical reach with local volume return and a final per-component correction (heat_smoothing.h).
+        StageTimer timer(&stats, "smoothing");
+        const double radius = options.reconstruction.particle_radius;
+        HeatSmoothingSettings settings;
+        settings.reach = smoothing_reach_of(post.smoothing_iterations, post.smoothing_strength, options.reconstruction.cube_size,
+                                            kSmoothingCoarseFloor) * radius;
+        settings.particle_radius = radius;
+        settings.volume_correction = post.volume_restoration;
+        const bool output_normals = post.normals && !post.sph_normals && post.normal_smoothing_iterations > 0;
+        settings.normal_iterations = output_normals ? post.normal_smoothing_iterations : 10;
+        settings.max_offset = options.reconstruction.compact_support();
+        settings.walls = nullptr;  // the container box's walls (post/wall_constraints.h) go here once it makes them
+        const HeatSmoothingReport report =
+            heat_smooth(mesh, adjacency, post.smoothing_weights ? weights : std::vector<float>{}, settings, threads);
+        normals_from_restoration = output_normals && report.normals_left;
+        stats.set_count("smoothing_reach", settings.reach / radius);
+        stats.set_count("smoothing_equivalent_iterations", report.iterations);
+        stats.set_count("smoothing_applications", report.applications);
+        if (report.reverted_components) stats.set_count("components_left_unsmoothed", static_cast<double>(report.reverted_components));
+    } else if (post.smoothing_iterations > 0) {
         StageTimer timer(&stats, "smoothing");
         const std::vector<float> smoothing_amount = post.smoothing_weights ? weights : std::vector<float>{};
         int32_t components = 0;

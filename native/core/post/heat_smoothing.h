@@ -47,8 +47,10 @@ constexpr bool kSmoothingCoarseFloor = true;
 // part, so the local return finds it).
 constexpr double kPartTime = 2.5;
 // Reach of the low-pass of the normal displacement that is returned after each part, in r. Smaller returns the
-// particles' bumps too (measured: 1 r returns them all), larger returns a tube's shrinkage less locally.
-constexpr double kLocalScale = 6.0;
+// particles' bumps and the pools' waves too (slope flicker at c = 0.5, reach 4.3 r: 0.060 / 0.055 / 0.054 at 6 / 9 /
+// 12 r; the research measured 1 r returning every bump), larger returns a tube's shrinkage less locally (hilbert2's
+// volume before the final correction: 1.011 / 1.0105 / 1.011 at c = 0.5, the same at 6-12 r).
+constexpr double kLocalScale = 9.0;
 // Chebyshev tails dropped (fraction of a displacement): positions; the returned displacement.
 constexpr double kPositionTolerance = 1e-3;
 constexpr double kReturnTolerance = 1e-2;
@@ -80,10 +82,14 @@ struct HeatSmoothingSettings {
     int normal_iterations = 10;     // smoothing of the correction's normals (Eq. 12); they are left in mesh.normals
     double max_offset = 0.0;        // cap of the correction's offset (absolute; 0: 4 r)
     int parts = 0;                  // 0: automatic (heat time <= kPartTime r^2 each)
-    bool grid_return = false;       // research: low-pass the returned displacement on a spatial grid (dropped)
-    bool reuse_return = false;      // research: return part 1's low-passed displacement again after the later parts
-    double return_tolerance = 0.0;  // research: 0 is kReturnTolerance
-    double local_scale = 0.0;       // research: reach of the return's low-pass in r; 0 is kLocalScale
+    // Research knobs (bench/smoothing_scale.py variants; the pipeline leaves them as they are):
+    bool grid_return = false;       // low-pass the returned displacement on a spatial grid instead of the mesh: a few
+                                    // passes instead of ~40 applications, but it mixes neighbouring pieces (droplets
+                                    // 0.41-0.78, hilbert2 0.91 before the correction): dropped
+    bool reuse_return = false;      // return part 1's low-passed displacement again after the later parts: a third less
+                                    // work, same tube smoothness, but slope flicker 0.062 instead of 0.055: dropped
+    double return_tolerance = 0.0;  // 0: kReturnTolerance (3e-3 / 1e-2 / 3e-2 measured: flicker 0.0597 / 0.0599 / 0.0606)
+    double local_scale = 0.0;       // reach of the return's low-pass in r; 0: kLocalScale
     const WallConstraints* walls = nullptr;
 };
 

@@ -1,0 +1,289 @@
+// The default smoothing: heat flow of a physical reach with local volume return (post/heat_smoothing.h), and the
+// measures at a physical scale (analysis/scale_metrics.h).
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "analysis/scale_metrics.h"
+#include "base/numbers.h"
+#include "mesh/adjacency.h"
+#include "mesh_builders.h"
+#include "pipeline.h"
+#include "post/heat_smoothing.h"
+#include "post/postprocess.h"
+#include "post/volume.h"
+#include "post/wall_constraints.h"
+
+using namespace meniscus;
+using namespace meniscus::test;
+
+namespace {
+
+constexpr double kRadius = 0.025;
+
+// A regular triangulated square [0, size]^2 (edge `edge`, every cell split along the same diagonal) carrying
+// z = amplitude sin(2 pi x / wavelength); open, so only the interior is measured.
+TriMesh wavy_plane(double size, double edge, double wavelength, double amplitude) {
+    TriMesh m;
+    const int n = static_cast<int>(std::lround(size / edge));
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i) add_vertex(m, {i * edge, j * edge, amplitude * std::sin(2.0 * kPi * i * edge / wavelength)});
+    auto id = [&](int i, int j) { return static_cast<int32_t>(j * (n + 1) + i); };
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            add_triangle(m, id(i, j), id(i + 1, j), id(i + 1, j + 1));
+            add_triangle(m, id(i, j), id(i + 1, j + 1), id(i, j + 1));
+        }
+    return m;
+}
+
+// Amplitude of the sine left in the middle third of the plane (least squares against sin).
+double sine_amplitude(const TriMesh& m, double size, double wavelength) {
+    double num = 0.0, den = 0.0;
+    for (std::size_t v = 0; v < m.num_vertices(); ++v) {
+        const double x = m.vertices[3 * v], y = m.vertices[3 * v + 1], z = m.vertices[3 * v + 2];
+        if (x < size / 3 || x > 2 * size / 3 || y < size / 3 || y > 2 * size / 3) continue;
+        const double s = std::sin(2.0 * kPi * x / wavelength);
+        num += z * s, den += s * s;
+    }
+    return num / den;
+}
+
+// A jittered lattice slab (a pool), optionally a three-particle-wide tube above it and one isolated particle.
+std::vector<float> scene(bool tube, bool droplet) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> jitter(-0.1f * 2 * kRadius, 0.1f * 2 * kRadius);
+    std::vector<float> p;
+    const float s = 2 * kRadius;
+    for (int z = 0; z < 6; ++z)
+        for (int y = 0; y < 20; ++y)
+            for (int x = 0; x < 20; ++x) p.insert(p.end(), {x * s + jitter(rng), y * s + jitter(rng), z * s + jitter(rng)});
+    if (tube)
+        for (int x = 0; x < 20; ++x)
+            for (int y = 0; y < 3; ++y)
+                for (int z = 0; z < 3; ++z) p.insert(p.end(), {x * s + jitter(rng), 0.4f + y * s + jitter(rng), 0.8f + z * s + jitter(rng)});
+    if (droplet) p.insert(p.end(), {0.5f, 0.5f, 1.5f});
+    return p;
+}
+
+PipelineOptions options(double cube, int threads) {
+    PipelineOptions o;
+    o.reconstruction = {kRadius, 2.0, cube, 0.6};
+    o.execution.threads = threads;
+    o.keep_raw_mesh = true;
+    return o;
+}
+
+PipelineResult run(const std::vector<float>& p, const PipelineOptions& o) { return run_pipeline(PositionsView(p.data(), p.size() / 3), {}, o); }
+
+std::vector<double> sorted_volumes(const TriMesh& m) {
+    int32_t count = 0;
+    const auto labels = component_labels(m, &count);
+    auto v = component_volumes(m, labels, count);
+    std::sort(v.begin(), v.end());
+    return v;
+}
+
+double count_of(const PipelineStats& stats, const std::string& name) {
+    for (const auto& entry : stats.counts)
+        if (entry.first == name) return entry.second;
+    return -1.0;
+}
+
+}  // namespace
+
+TEST_CASE("heat coefficients keep constants, match the heat kernel, and need ~sqrt(N) terms", "[heat]") {
+    for (double n : {3.0, 25.0, 200.0}) {
+        const auto c = heat_coefficients(n, 1e-3);
+        double sum = 0.0;
+        for (double x : c) {
+            sum += x;
+            CHECK(x > -1e-12);  // the heat kernel's coefficients are positive: the sum is a convex combination
+        }
+        CHECK(sum == Approx(1.0).margin(1e-12));
+        for (double y : {-0.9, 0.0, 0.8, 0.99}) {
+            double value = 0.0;
+            for (std::size_t k = 0; k < c.size(); ++k) value += c[k] * std::cos(double(k) * std::acos(y));
+            CHECK(value == Approx(std::exp(n * (y - 1.0))).margin(2e-3));
+        }
+        CHECK(c.size() < 8 * std::sqrt(n) + 12);
+    }
+}
+
+TEST_CASE("the iteration count means its reach at c = 0.5 at every cube size", "[heat]") {
+    const double at_half = smoothing_reach_of(25, 1.0, 0.5, false);
+    CHECK(at_half == Approx(5.0 * kEdgePerCube * 0.5));
+    CHECK(smoothing_reach_of(25, 1.0, 0.25, false) == at_half);
+    CHECK(smoothing_reach_of(25, 1.0, 1.0, false) == at_half);
+    CHECK(smoothing_reach_of(100, 0.25, 0.5, false) == Approx(at_half));  // iterations x strength
+    CHECK(smoothing_reach_of(0, 1.0, 0.5, false) == 0.0);
+    CHECK(smoothing_reach_of(25, 1.0, 1.0, true) == Approx(2.0 * at_half));  // the coarse floor: explicit steps of this mesh
+    CHECK(smoothing_reach_of(25, 1.0, 0.25, true) == at_half);
+}
+
+TEST_CASE("heat smoothing: the same physical result for any edge length", "[heat]") {
+    // A sine of wavelength 12 r smoothed with reach 4 r (no volume terms) on planes with edges 0.27 r and 0.54 r
+    // (c = 0.25 and 0.5): the same attenuation, the heat kernel's exp(-t k^2) with t = reach^2 / 4. The paper's 25
+    // explicit iterations attenuate very differently.
+    const double size = 48 * kRadius, wavelength = 12 * kRadius, amplitude = 0.2 * kRadius;
+    double after[2], explicit_after[2];
+    int k = 0;
+    for (double edge : {0.27 * kRadius, 0.54 * kRadius}) {
+        TriMesh m = wavy_plane(size, edge, wavelength, amplitude);
+        TriMesh e = m;
+        const MeshAdjacency adjacency = build_adjacency(m, 2);
+        HeatSmoothingSettings s;
+        s.reach = 4 * kRadius;
+        s.particle_radius = kRadius;
+        s.local_return = false;
+        s.volume_correction = false;
+        // Weights of 1 (not empty): an open sheet has no volume, so the guard against collapsed blobs must stay off.
+        heat_smooth(m, adjacency, std::vector<float>(m.num_vertices(), 1.0f), s, 2);
+        after[k] = sine_amplitude(m, size, wavelength) / amplitude;
+        laplacian_smooth(e, adjacency, {}, 25, 1.0, 2);
+        explicit_after[k] = sine_amplitude(e, size, wavelength) / amplitude;
+        ++k;
+    }
+    INFO("heat " << after[0] << " / " << after[1] << ", explicit " << explicit_after[0] << " / " << explicit_after[1]);
+    const double k2 = std::pow(2.0 * kPi / wavelength, 2.0), t = 4.0 * kRadius * kRadius;
+    CHECK(after[0] == Approx(std::exp(-t * k2)).margin(0.05));
+    CHECK(after[0] == Approx(after[1]).margin(0.03));
+    CHECK(std::fabs(explicit_after[0] - explicit_after[1]) > 0.3);
+}
+
+TEST_CASE("heat smoothing: the same physical surface at c = 0.25 and c = 0.5 (particles)", "[heat][slow]") {
+    const std::vector<float> p = scene(false, false);
+    double heat_abs[2], raw_abs[2];
+    int k = 0;
+    for (double cube : {0.25, 0.5}) {
+        const PipelineResult r = run(p, options(cube, 2));
+        REQUIRE(check_mesh(r.mesh).ok());
+        const MeshAdjacency a = build_adjacency(r.mesh, 2), ra = build_adjacency(r.raw_mesh, 2);
+        heat_abs[k] = heat_distance(r.mesh, a, 2 * kRadius, 2) / kRadius;
+        raw_abs[k] = heat_distance(r.raw_mesh, ra, 2 * kRadius, 2) / kRadius;
+        CHECK(count_of(r.stats, "smoothing_reach") == Approx(4.0).epsilon(0.01));
+        ++k;
+    }
+    INFO("smoothed " << heat_abs[0] << " / " << heat_abs[1] << " r, raw " << raw_abs[0] << " / " << raw_abs[1] << " r");
+    CHECK(heat_abs[0] < 0.5 * raw_abs[0]);
+    CHECK(heat_abs[1] < 0.5 * raw_abs[1]);
+    CHECK(heat_abs[0] == Approx(heat_abs[1]).epsilon(0.25));
+}
+
+TEST_CASE("heat smoothing: weight-0 vertices keep their bits", "[heat]") {
+    TriMesh mesh = make_noisy_sphere(3, 1.0, 0.03);
+    const MeshAdjacency adjacency = build_adjacency(mesh, 2);
+    std::vector<float> x = mesh.vertices;
+    heat_filter(x, 3, adjacency, std::vector<float>(mesh.num_vertices(), 0.0f), 80.0, 1e-3, 2);
+    CHECK(x == mesh.vertices);
+    TriMesh smoothed = mesh;
+    HeatSmoothingSettings s;
+    s.reach = 0.5;
+    s.particle_radius = 0.1;
+    heat_smooth(smoothed, adjacency, std::vector<float>(mesh.num_vertices(), 0.0f), s, 2);
+    CHECK(smoothed.vertices == mesh.vertices);
+}
+
+TEST_CASE("heat smoothing: pool smoothed, tube keeps its volume where it is, droplet untouched", "[heat][slow]") {
+    const std::vector<float> p = scene(true, true);
+    for (double cube : {1.0, 0.5}) {
+        INFO("cube " << cube);
+        PipelineOptions o = options(cube, 2);
+        o.postprocess.volume_restoration = false;  // the local return alone: no per-component offset
+        const PipelineResult r = run(p, o);
+        REQUIRE(check_mesh(r.mesh).ok());
+        const auto before = sorted_volumes(r.raw_mesh), after = sorted_volumes(r.mesh);
+        REQUIRE(before.size() == 3);  // droplet, tube, pool
+        REQUIRE(after.size() == 3);
+        PipelineOptions unsmoothed = options(cube, 2);
+        unsmoothed.postprocess.smoothing_iterations = 0;
+        const auto decimated = sorted_volumes(run(p, unsmoothed).mesh);
+        CHECK(after[0] == Approx(decimated[0]).epsilon(1e-6));  // the droplet (weight 0) is not moved
+        CHECK(after[1] / before[1] > 0.97);                     // the tube: held locally
+        CHECK(after[1] / before[1] < 1.03);                     // and not inflated
+        CHECK(after[2] / before[2] == Approx(1.0).epsilon(0.01));
+        CHECK(assess_quality(r.mesh).bumpiness < 0.5 * assess_quality(r.raw_mesh).bumpiness);
+        // With the final correction every component's volume is exact.
+        const auto exact = sorted_volumes(run(p, options(cube, 2)).mesh);
+        CHECK(exact[1] == Approx(decimated[1]).epsilon(1e-4));
+        CHECK(exact[2] == Approx(decimated[2]).epsilon(1e-4));
+    }
+}
+
+TEST_CASE("heat smoothing: vertices on a wall stay on it and slide along it", "[heat]") {
+    // A noisy sphere whose bottom cap is pressed onto the wall z = -0.6 (min z): those vertices are on the wall.
+    TriMesh mesh = make_noisy_sphere(4, 1.0, 0.04);
+    WallConstraints walls;
+    walls.mask.assign(mesh.num_vertices(), 0);
+    walls.planes = {-9, 9, -9, 9, -0.6f, 9};
+    std::size_t on_wall = 0;
+    for (std::size_t v = 0; v < mesh.num_vertices(); ++v)
+        if (mesh.vertices[3 * v + 2] < -0.6f) {
+            mesh.vertices[3 * v + 2] = -0.6f;
+            walls.mask[v] = 1u << 4;
+            ++on_wall;
+        }
+    REQUIRE(on_wall > 20);
+    const TriMesh start = mesh;
+    const MeshAdjacency adjacency = build_adjacency(mesh, 2);
+    HeatSmoothingSettings s;
+    s.reach = 0.4;
+    s.particle_radius = 0.1;
+    s.walls = &walls;
+    heat_smooth(mesh, adjacency, {}, s, 2);
+    double slid = 0.0;
+    for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
+        if (!walls.mask[v]) continue;
+        CHECK(mesh.vertices[3 * v + 2] == -0.6f);
+        slid = std::max(slid, std::hypot(double(mesh.vertices[3 * v]) - start.vertices[3 * v],
+                                         double(mesh.vertices[3 * v + 1]) - start.vertices[3 * v + 1]));
+    }
+    CHECK(slid > 1e-3);  // they moved along the wall
+    CHECK(assess_quality(mesh).volume == Approx(assess_quality(start).volume).epsilon(1e-4));
+    // Without walls the same vertices leave the plane.
+    TriMesh free = start;
+    s.walls = nullptr;
+    heat_smooth(free, adjacency, {}, s, 2);
+    std::size_t off = 0;
+    for (std::size_t v = 0; v < free.num_vertices(); ++v) off += walls.mask[v] && free.vertices[3 * v + 2] != -0.6f;
+    CHECK(off > 0);
+}
+
+TEST_CASE("heat smoothing is the same for any thread count", "[heat][slow]") {
+    const std::vector<float> p = scene(true, true);
+    const PipelineResult one = run(p, options(0.75, 1));
+    const PipelineResult two = run(p, options(0.75, 2));
+    const PipelineResult three = run(p, options(0.75, 3));
+    CHECK(one.mesh.vertices == two.mesh.vertices);
+    CHECK(one.mesh.vertices == three.mesh.vertices);
+    CHECK(one.mesh.normals == two.mesh.normals);
+    CHECK(one.mesh.normals == three.mesh.normals);
+    TriMesh mesh = make_noisy_sphere(4, 1.0, 0.05);
+    const MeshAdjacency adjacency = build_adjacency(mesh, 1);
+    HeatSmoothingSettings s;
+    s.reach = 0.3;
+    s.particle_radius = 0.1;
+    TriMesh a = mesh, b = mesh;
+    heat_smooth(a, adjacency, {}, s, 1);
+    heat_smooth(b, adjacency, {}, s, 3);
+    CHECK(a.vertices == b.vertices);
+}
+
+TEST_CASE("hfL: Taubin passes from the raw mesh's edge, heat variant, in the quality report", "[heat]") {
+    CHECK(hfl_passes(2.0, 1.0) == 5);  // round(1.36 * 4)
+    CHECK(hfl_passes(0.05, 0.0135) == static_cast<int>(std::lround(1.36 * std::pow(0.05 / 0.0135, 2.0))));
+    const TriMesh noisy = make_noisy_sphere(4, 1.0, 0.05), smooth = make_icosphere(4, 1.0);
+    const MeshQuality q = assess_quality(noisy, 2, 0.2);
+    CHECK(q.mean_edge_length > 0.0);
+    CHECK(q.hfl_passes == hfl_passes(0.2, q.mean_edge_length));
+    CHECK(q.hfl > 0.0);
+    CHECK(q.heat_bumpiness > 0.0);
+    const MeshQuality s = assess_quality(smooth, 2, 0.2, q.mean_edge_length);
+    CHECK(s.hfl_passes == q.hfl_passes);
+    CHECK(s.hfl < 0.5 * q.hfl);
+    CHECK(s.heat_bumpiness < 0.5 * q.heat_bumpiness);
+    CHECK(assess_quality(noisy, 2).hfl_passes == 0);  // no scale: not measured
+}
