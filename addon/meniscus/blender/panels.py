@@ -140,7 +140,7 @@ def draw_parameters(layout, settings, group):
     """Every schema parameter of a group, in schema order: greyed out while the parameter it depends on is off, and
     with its Automatic switch where it has one. A parameter added to the schema appears here by itself."""
     for parameter in parameters.PARAMETERS:
-        if parameter.group != group or parameter.name in properties.DRIVEN_BY_ADDON:
+        if parameter.group != group or parameter.name in properties.DRIVEN_BY_ADDON or parameter.type == "vector3":
             continue
         column = layout.column(align=True)
         column.active = not parameter.depends_on or _is_on(settings, parameter.depends_on)
