@@ -78,7 +78,8 @@ def child(args):
 
             def run(positions):
                 kwargs = full if args.mode == "full" else dict(normals=False)
-                mesh = meniscus.reconstruct(positions, RADIUS, SMOOTHING_LENGTH, args.cube, ISO, threads=args.threads, **kwargs)
+                mesh = meniscus.reconstruct(positions, RADIUS, smoothing_length=SMOOTHING_LENGTH, cube_size=args.cube,
+                                            iso_threshold=ISO, threads=args.threads, **kwargs)
                 return mesh, mesh.vertices, mesh.triangles, mesh.normals
         else:
             import pysplashsurf
