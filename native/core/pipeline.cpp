@@ -33,25 +33,29 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
     TriMesh mesh = std::move(reconstruction.mesh);
     if (options.keep_raw_mesh) result.raw_mesh = mesh;
 
+    // Mesh cleanup and barnacle decimation (Sec. 3.3): the slivers marching cubes leaves at grid points.
     if (post.mesh_cleanup) {
         StageTimer timer(&stats, "mesh cleanup");
         const std::size_t removed = mesh_cleanup(mesh, surface.cube_edge(), post.mesh_cleanup_snap_distance, threads);
         stats.set_count("cleanup_removed_vertices", static_cast<double>(removed));
     }
 
-    MeshAdjacency adjacency;  // decimation hands over the one its last pass built
+    MeshAdjacency adjacency;
     if (post.decimate_barnacles) {
         StageTimer timer(&stats, "decimation");
         const std::size_t removed = decimate_barnacles(mesh, threads, &adjacency);
         stats.set_count("decimated_configurations", static_cast<double>(removed));
     }
 
-    // From here on the topology stays as it is: one adjacency serves smoothing, restoration and normals.
-    if (mesh.num_vertices() == 0 || adjacency.vertex_triangles.rows() != mesh.num_vertices()) {
+    // From here on the topology stays as it is: one adjacency serves smoothing, restoration and normals. Decimation
+    // hands over the one its last pass built, when it could (rows for every vertex of a non-empty mesh).
+    const bool handed_over = mesh.num_vertices() > 0 && adjacency.vertex_triangles.rows() == mesh.num_vertices();
+    if (!handed_over) {
         StageTimer timer(&stats, "adjacency");
         adjacency = build_adjacency(mesh, threads);
     }
 
+    // Feature weights (Sec. 3.2): how strongly each vertex is smoothed.
     std::vector<float> weights;
     if ((post.smoothing_iterations > 0 && post.smoothing_weights) || post.output_weights) {
         StageTimer timer(&stats, "weights");
@@ -63,6 +67,7 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
     if (post.output_weights) mesh.attributes.push_back({"weights", 1, weights});
     const std::vector<float> smoothing_amount = post.smoothing_weights ? std::move(weights) : std::vector<float>{};
 
+    // Weighted Laplacian smoothing (Eq. 3-5), remembering the surface it started from.
     UnsmoothedSurface unsmoothed;
     if (post.smoothing_iterations > 0) {
         StageTimer timer(&stats, "smoothing");
@@ -70,13 +75,15 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         laplacian_smooth(mesh, adjacency, smoothing_amount, post.smoothing_iterations, post.smoothing_strength, threads);
     }
 
-    SmoothedNormals restoration_normals;  // the normals restoration moved the vertices along
+    // Volume restoration: each component's volume back, along smoothed normals the normals stage may take.
+    SmoothedNormals restoration_normals;
     if (post.smoothing_iterations > 0 && post.volume_restoration) {
         StageTimer timer(&stats, "volume restoration");
         restoration_normals = restore_component_volumes(mesh, adjacency, unsmoothed, smoothing_amount, surface.compact_support(),
                                                         restoration_normal_iterations(post), threads);
     }
 
+    // The collapse guard: a component that smoothing collapsed gets its unsmoothed positions back.
     if (post.smoothing_iterations > 0) {
         const std::size_t reverted = revert_collapsed_components(mesh, unsmoothed, threads);
         if (reverted > 0) {
@@ -85,6 +92,7 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         }
     }
 
+    // Normals (Sec. 3.4): the colour field's gradient, or area-weighted and smoothed by Eq. 12.
     if (post.normals) {
         StageTimer timer(&stats, "normals");
         mesh.normals = post.sph_normals ? colour_field_normals(particles, mesh.vertices, threads)
@@ -92,12 +100,14 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
                                                                   std::move(restoration_normals), threads);
     }
 
+    // Particle attributes onto the final vertices (Eq. 7, or the nearest particle's for whole numbers).
     if (!attributes.empty()) {
         StageTimer timer(&stats, "attributes");
         for (Attribute& transferred : transfer_attributes(particles, attributes, mesh.vertices, threads))
             mesh.attributes.push_back(std::move(transferred));
     }
 
+    // The last line of defence for the host application (post/vertex_guard.h).
     const std::size_t clamped = keep_vertices_near_particles(mesh, reconstruction.grid, surface.compact_support() + 2.0 * surface.cube_edge());
     if (clamped > 0)
         stats.warnings.push_back("internal: " + std::to_string(clamped) + " vertices were outside the particles' reach and were clamped");
