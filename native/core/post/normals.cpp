@@ -37,18 +37,17 @@ std::vector<float> area_weighted_normals(const TriMesh& mesh, const CsrList& vt,
     parallel_blocks(static_cast<int64_t>(mesh.num_vertices()), threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t v = begin; v < end; ++v) {
             // Summing unnormalised cross products is the area-weighted mean direction.
-            Vec3d sum, largest;
-            double largest_norm = 0.0;
+            double sum[3] = {0.0, 0.0, 0.0}, largest[3] = {0.0, 0.0, 0.0}, largest_norm = 0.0;
             for (int64_t k = vt.begin(v); k < vt.end(v); ++k) {
                 const Vec3d n = triangle_cross(mesh.vertices.data(), mesh.triangles.data() + 3 * static_cast<int64_t>(vt.items[k]));
                 const double norm = dot(n, n);
                 if (!std::isfinite(norm)) continue;  // a non-finite neighbour must not poison this vertex
-                sum.x += n.x, sum.y += n.y, sum.z += n.z;
-                if (norm > largest_norm) largest_norm = norm, largest = n;
+                sum[0] += n.x, sum[1] += n.y, sum[2] += n.z;
+                if (norm > largest_norm) largest_norm = norm, largest[0] = n.x, largest[1] = n.y, largest[2] = n.z;
             }
             float* out = normals.data() + 3 * v;
             // Opposite faces can cancel (a thin sheet folded onto itself): fall back to the largest incident face.
-            if (!normalise_into(sum, out) && !normalise_into(largest, out)) set_fallback(out);
+            if (!normalise_into({sum[0], sum[1], sum[2]}, out) && !normalise_into({largest[0], largest[1], largest[2]}, out)) set_fallback(out);
         }
     });
     return normals;
