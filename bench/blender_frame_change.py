@@ -1,12 +1,9 @@
 """Blender side of a frame change: from `scene.frame_set(f)` to the updated ~1 M-triangle surface, with the core's
 and Blender's shares.
 
-    bash bench/blender_frame_change.sh        # both Blender versions, writes bench/results/blender_frame_change.md
-    blender -b --factory-startup --python-exit-code 1 --python bench/blender_frame_change.py -- \
-        --json build/bench/blender_frame_change_3.4.json
-    build/venv/bpy-4.5/bin/python bench/blender_frame_change.py -- --json build/bench/blender_frame_change_4.5.json
-    /usr/bin/python3 bench/blender_frame_change.py --report build/bench/blender_frame_change_3.4.json \
-        build/bench/blender_frame_change_4.5.json
+    bash bench/blender_frame_change.sh        # every tested Blender, writes bench/results/blender_frame_change.md
+    (it installs the add-on from dist/ into a fresh user folder per Blender, then runs this script there)
+    /usr/bin/python3 bench/blender_frame_change.py --report build/bench/blender_frame_change_*.json
 
 Input (prepared once, cached in build/bench/blender_frame_change/): FRAMES legacy VTK files (binary) made from the
 splashsurf set pentagonal_hexecontahedron_32286_particles.bgeo, each with its own small Gaussian jitter of the
@@ -23,8 +20,8 @@ parts are timed inside the same call by wrapping, in this process only, the func
   read     meniscus.api.read_particles            (file -> positions and attributes)
   core     meniscus.api.reconstruct               (the C++ core incl. its pybind11 call; core_stages = the
                                                    core's own per-stage seconds, mesh.stats)
-  write    meniscus.blender.mesh_update.write_surface (arrays -> Blender mesh: geometry, attributes, normals)
-  handler  meniscus.blender.update.update_scene (the whole frame_change_post work)
+  write    <add-on>.blender.mesh_update.write_surface (arrays -> Blender mesh: geometry, attributes, normals)
+  handler  <add-on>.blender.update.update_scene (the whole frame_change_post work)
   Blender  = total - core - read = write + add-on glue + depsgraph evaluation and the rest of frame_set
 Every frame change goes to another file, so each one reconstructs. The first frame change after the parameters are
 set is a warm-up (the mesh grows from the add operator's coarse preview to 1 M triangles, attributes are created)
@@ -170,23 +167,21 @@ def run_blender(arguments):
     import bpy
 
     as_module = not bpy.app.binary_path
-    if as_module:  # what --factory-startup does for the executable
-        bpy.ops.wm.read_factory_settings(use_empty=False)
-    addon_path = os.path.abspath(arguments.addon_path)
-    sys.path.insert(0, addon_path)
-    import meniscus
-    from meniscus import api
-    from meniscus.blender import handlers, mesh_update
+    # The add-on as a user has it: bench/blender_frame_change.sh installed the zip into a fresh user folder (the
+    # test suite's install step); here it is enabled as the Preferences checkbox does.
+    sys.path.insert(0, str(ROOT / "tests" / "blender"))
+    import _support
 
-    assert os.path.dirname(os.path.dirname(os.path.abspath(meniscus.__file__))) == addon_path, meniscus.__file__
+    addon = _support.enable_addon()
+    api = addon.api
+    update, mesh_update = _support.addon_modules(addon, "blender.update", "blender.mesh_update")
     paths = prepare_frames()
-    meniscus.register()
 
     timers = Timers()
     timers.wrap(api, "read_particles", "read")
     timers.wrap(api, "reconstruct", "core")
     timers.wrap(mesh_update, "write_surface", "write")
-    timers.wrap(handlers, "update_scene", "handler")
+    timers.wrap(update, "update_scene", "handler")
 
     for obj in list(bpy.data.objects):
         bpy.data.objects.remove(obj, do_unlink=True)
@@ -314,7 +309,6 @@ def main():
 
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--addon-path", default=str(ROOT / "build" / "addon"))
     parser.add_argument("--json", default="", help="write this run's results to this JSON file")
     parser.add_argument("--report", nargs="+", metavar="JSON",
                         help="no Blender: merge these runs' JSON files into bench/results/blender_frame_change.md/.json")

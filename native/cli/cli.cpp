@@ -7,18 +7,24 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cctype>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <regex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "base/errors.h"
+#include "io/frame_pattern.h"
 #include "io/io.h"
 #include "io/io_util.h"
 #include "base/memory.h"
@@ -36,53 +42,36 @@ using namespace meniscus;
 namespace {
 
 // ---- sequences ------------------------------------------------------------------------------------------------
-// "{}" in a file name stands for the frame number, with or without zero padding: frames are found by listing the
-// folder, so fluid_{}.vtk matches fluid_7.vtk and fluid_0007.vtk alike.
+// The frame-pattern rule (io/frame_pattern.h) shared with the Python API and the add-on: {} or #### in the input
+// name stands for the frame number; fluid_{}.vtk matches fluid_7.vtk and fluid_0007.vtk alike.
 struct Frame {
     long number;
-    std::string digits;  // as written in the input name, reused for the output name
+    std::string digits;  // as written in the input name, reused for an output name with {}
     std::string path;
 };
 
-bool is_sequence(const std::string& pattern) { return pattern.find("{}") != std::string::npos; }
+bool is_sequence(const std::string& pattern) { return has_frame_placeholder(pattern); }
 
-std::string substitute(const std::string& pattern, const std::string& digits) {
-    std::string out = pattern;
-    const auto at = out.find("{}");
-    if (at != std::string::npos) out.replace(at, 2, digits);
-    return out;
+// An output (or raw-output) name for a frame: {} takes the input's digits as written, #### pads to its width.
+std::string output_path(const std::string& pattern, const Frame& frame) {
+    const std::size_t at = pattern.find("{}");
+    if (at != std::string::npos) return std::string(pattern).replace(at, 2, frame.digits);
+    return parse_frame_pattern(pattern, std::vector<std::string>{}).path(frame.number);
 }
 
-std::vector<Frame> find_frames(const std::string& pattern) {
-    const fs::path path = path_from_utf8(pattern);
-    const std::string name = path_to_utf8(path.filename());
-    const auto at = name.find("{}");
-    if (at == std::string::npos) throw InputError("input pattern '" + pattern + "': '{}' must be in the file name, not the folder");
-    const std::string prefix = name.substr(0, at), suffix = name.substr(at + 2);
-    const fs::path folder = path.has_parent_path() ? path.parent_path() : fs::path(".");
+// The frames of the input pattern; `duplicates` gets a line per frame spelled twice (which one is used and why).
+std::vector<Frame> find_frames(const FramePattern& pattern, const std::string& input, std::vector<std::string>& duplicates) {
     std::error_code error;
-    if (!fs::is_directory(folder, error)) throw InputError("input pattern '" + pattern + "': folder '" + path_to_utf8(folder) + "' does not exist");
-    std::map<long, Frame> frames;
-    for (const auto& entry : fs::directory_iterator(folder, error)) {
-        const std::string file = path_to_utf8(entry.path().filename());
-        if (file.size() <= prefix.size() + suffix.size() || file.compare(0, prefix.size(), prefix) != 0 ||
-            file.compare(file.size() - suffix.size(), suffix.size(), suffix) != 0)
-            continue;
-        const std::string digits = file.substr(prefix.size(), file.size() - prefix.size() - suffix.size());
-        if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
-        const long number = std::stol(digits);
-        // Duplicate frame numbers (fluid_7 and fluid_007): keep the first name in sorted order, deterministically,
-        // and say so.
-        auto it = frames.find(number);
-        const std::string full = path_to_utf8(folder / entry.path().filename());
-        if (it != frames.end())
-            std::fprintf(stderr, "warning: frame %ld matches both %s and %s; using %s\n", number, it->second.path.c_str(), full.c_str(),
-                         std::min(full, it->second.path).c_str());
-        if (it == frames.end() || full < it->second.path) frames[number] = {number, digits, full};
+    if (!pattern.directory.empty() && !fs::is_directory(path_from_utf8(pattern.directory), error))
+        throw InputError("input pattern '" + input + "': folder '" + pattern.directory + "' does not exist");
+    const FrameListing listing = list_frames(pattern);
+    duplicates = listing.duplicates;
+    std::vector<Frame> frames;
+    for (const auto& [number, path] : listing.frames) {
+        const std::string name = path_to_utf8(path_from_utf8(path).filename());
+        frames.push_back({static_cast<long>(number), name.substr(pattern.prefix.size(), name.size() - pattern.prefix.size() - pattern.suffix.size()), path});
     }
-    std::vector<Frame> result;
-    for (auto& kv : frames) result.push_back(kv.second);
-    return result;
+    return frames;
 }
 
 // ---- progress -------------------------------------------------------------------------------------------------
@@ -91,6 +80,7 @@ public:
     Progress(std::size_t total, bool enabled) : total_(total), enabled_(enabled && total > 1), start_(std::chrono::steady_clock::now()) {}
     void update(std::size_t done, const std::string& label) {
         if (!enabled_) return;
+        std::lock_guard<std::mutex> lock(mutex_);
         const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
         const int width = 30;
         const int filled = total_ ? static_cast<int>(width * done / total_) : width;
@@ -102,11 +92,13 @@ public:
     }
     // Messages interleaved with the bar start on a fresh line.
     void message(const std::string& text) {
+        std::lock_guard<std::mutex> lock(mutex_);
         std::fprintf(stderr, "%s%s\n", enabled_ ? "\n" : "", text.c_str());
         std::fflush(stderr);
     }
 
 private:
+    std::mutex mutex_;  // frames in parallel (--mt-files) report from several threads
     std::size_t total_;
     bool enabled_;
     std::chrono::steady_clock::time_point start_;
@@ -154,23 +146,44 @@ json quality_json(const MeshQuality& q) {
 }
 
 struct ReconstructArgs {
-    std::string input, output, raw_output, stats_path;
+    std::string input, output, output_dir, raw_output, stats_path;
     Parameters parameters;  // the pipeline's, filled from the schema's flags
     std::optional<long> start, end;
     std::vector<std::string> attributes;
     bool check = false;
     bool quiet = false;
+    bool frames_in_parallel = false;  // --mt-files
+    bool threads_per_frame = true;    // --mt-particles
+    bool double_precision = false;    // -d: accepted from splashsurf command lines, no effect (see add_compatibility_flags)
 };
+
+// splashsurf spells a switch --normals=on; accepted the same here, and a bare --normals means on.
+bool parse_switch(const std::string& flag, const std::string& text) {
+    if (text.empty() || text == "on" || text == "true" || text == "1" || text == "yes") return true;
+    if (text == "off" || text == "false" || text == "0" || text == "no") return false;
+    throw CLI::ValidationError(flag, "takes on or off, got '" + text + "'");
+}
+
+CLI::Option* add_switch(CLI::App& command, const std::string& names, bool& target, const std::string& help) {
+    const std::string flag = names.substr(names.find("--"), names.find(',', names.find("--")) - names.find("--"));
+    CLI::Option* option = command.add_option(
+        names,
+        [&target, flag](const CLI::results_t& results) {
+            target = parse_switch(flag, results.empty() ? std::string() : results.back());
+            return true;
+        },
+        help);
+    // No default_str: CLI11 would hand it to the callback as the value of a bare switch. The default goes in the help.
+    option->expected(0, 1)->type_name("[on|off]");
+    option->description(help + " [default: " + (target ? "on" : "off") + "]");
+    return option;
+}
 
 // The text of a schema parameter's command-line value as a number: on|off for switches, the automatic word
 // (auto, all) where there is one, a number otherwise. Errors name the flag in the user's spelling.
 double parse_parameter(const ParameterSpec& spec, const std::string& flag, const std::string& text) {
     double value = 0.0;
-    if (spec.cli_style == CliStyle::on_off) {
-        if (text == "on" || text == "true" || text == "1" || text == "yes") return 1.0;
-        if (text == "off" || text == "false" || text == "0" || text == "no") return 0.0;
-        throw CLI::ValidationError(flag, "takes on or off, got '" + text + "'");
-    }
+    if (spec.cli_style != CliStyle::value) return parse_switch(flag, text) ? 1.0 : 0.0;
     if (spec.automatic && text == spec.automatic_word) return *spec.automatic;
     if (!io_detail::parse_double(text, value))
         throw CLI::ValidationError(flag, "takes " + spec.allowed() + ", got '" + text + "'");
@@ -192,15 +205,39 @@ void add_parameter_flags(CLI::App& command, Parameters& parameters) {
         const std::string flag = spec.cli.substr(long_start, spec.cli.find(',', long_start) - long_start);
         std::string help = spec.help;
         if (!spec.unit.empty()) help += " [" + spec.unit + "]";
-        if (spec.cli_style == CliStyle::flag) {
-            command.add_flag_callback(spec.cli, [&parameters, &spec] { spec.set(parameters, 1.0); }, help);
+        if (spec.is_vector()) {
+            CLI::Option* option = command.add_option(
+                spec.cli,
+                [&parameters, &spec, flag](const CLI::results_t& results) {
+                    Vector3 value{};
+                    for (std::size_t k = 0; k < 3; ++k)
+                        if (k >= results.size() || !io_detail::parse_double(results[k], value[k]))
+                            throw CLI::ValidationError(flag, "takes three numbers (x y z)");
+                    if (auto problem = spec.problem(std::optional<Vector3>(value))) throw CLI::ValidationError(flag, *problem);
+                    spec.set_vector(parameters, value);
+                    return true;
+                },
+                help);
+            option->expected(3)->type_name("X Y Z");
             continue;
         }
         if (spec.cli_style == CliStyle::value) help += "; " + spec.allowed();
-        CLI::Option* option = command.add_option_function<std::string>(
-            spec.cli, [&parameters, &spec, flag](const std::string& text) { spec.set(parameters, parse_parameter(spec, flag, text)); },
+        CLI::Option* option = command.add_option(
+            spec.cli,
+            [&parameters, &spec, flag](const CLI::results_t& results) {
+                spec.set(parameters, parse_parameter(spec, flag, results.empty() ? std::string() : results.back()));
+                return true;
+            },
             help);
-        option->type_name(spec.cli_style == CliStyle::on_off ? "on|off" : spec.automatic ? "NUMBER|" + spec.automatic_word : "NUMBER");
+        if (spec.cli_style == CliStyle::value) {
+            option->type_name(spec.automatic ? "NUMBER|" + spec.automatic_word : "NUMBER");
+        } else {
+            // splashsurf's spelling --normals=on and the bare switch --normals (meaning on) both work. No
+            // default_str: CLI11 would pass it as the value of a bare switch; the default goes in the help instead.
+            option->expected(0, 1)->type_name("[on|off]");
+            option->description(help + " [default: " + cli_value_text(spec, spec.default_value()) + "]");
+            continue;
+        }
         if (spec.required)
             option->required();
         else
@@ -257,16 +294,95 @@ json run_frame(const ReconstructArgs& args, const std::string& input, const std:
     return record;
 }
 
-int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
-    validate(args.parameters);
+// The output name of an input when -o is not given, as splashsurf names it: {input name}_surface.vtk (the
+// extension of the input dropped, a .gz with it), in --output-dir or the current folder.
+std::string default_output_name(const std::string& input) {
+    std::string name = path_to_utf8(path_from_utf8(input).filename());
+    for (const char* extension : {".gz", ""}) {
+        if (*extension && !(name.size() > 3 && name.compare(name.size() - 3, 3, extension) == 0)) continue;
+        if (*extension) name.erase(name.size() - 3);
+        const std::size_t dot = name.rfind('.');
+        if (dot != std::string::npos && dot > 0) name.erase(dot);
+        break;
+    }
+    return name + "_surface.vtk";
+}
 
-    std::vector<Frame> frames;
+// A path under --output-dir unless it is absolute.
+std::string in_output_dir(const std::string& output_dir, const std::string& path) {
+    if (output_dir.empty() || path.empty() || path_from_utf8(path).is_absolute()) return path;
+    return path_to_utf8(path_from_utf8(output_dir) / path_from_utf8(path));
+}
+
+// --output-raw-mesh takes a path, or splashsurf's on/off: on writes <output>_raw<extension> beside the output.
+std::string raw_output_pattern(const std::string& raw_output, const std::string& output) {
+    if (raw_output.empty() || raw_output == "off") return "";
+    if (raw_output != "on") return raw_output;
+    const std::size_t dot = output.rfind('.');
+    return dot == std::string::npos ? output + "_raw" : output.substr(0, dot) + "_raw" + output.substr(dot);
+}
+
+struct FrameJob {
+    Frame frame;
+    std::string output, raw_output;
+};
+
+// Flags of splashsurf's command line that choose how splashsurf computes, not what: accepted, so that its command
+// lines run unchanged, and named in the help as having no effect here.
+void add_compatibility_flags(CLI::App& command, ReconstructArgs& args) {
+    const std::string group = "splashsurf compatibility";
+    add_switch(command, "-d,--double-precision", args.double_precision,
+               "No effect: double precision moves splashsurf's own vertices by at most 0.4 % of a cube and gives the same "
+               "triangles")->group(group);
+    static bool subdomain_grid = true;
+    add_switch(command, "--subdomain-grid", subdomain_grid, "No effect: Meniscus always works on a sparse grid of bricks")->group(group);
+    static double rest_density = 1000.0, subdomain_cubes = 64;
+    command.add_option("--rest-density", rest_density, "No effect: the rest density cancels out of the colour field")->group(group);
+    command.add_option("--subdomain-cubes", subdomain_cubes, "No effect: Meniscus's bricks are 32 cubes wide")->group(group);
+}
+
+// validate() names parameters as the schema does (mesh_aabb_min); here they are called by their flags.
+void validate_in_flag_names(const Parameters& parameters) {
+    try {
+        validate(parameters);
+    } catch (const InputError& error) {
+        std::string message = error.what();
+        for (const ParameterSpec& spec : parameter_schema()) {
+            const std::size_t start = spec.cli.find("--");
+            const std::string flag = spec.cli.substr(start, spec.cli.find(',', start) - start);
+            for (std::size_t at = message.find(spec.name); at != std::string::npos; at = message.find(spec.name, at + flag.size())) {
+                const bool whole = (at == 0 || !(std::isalnum(static_cast<unsigned char>(message[at - 1])) || message[at - 1] == '_')) &&
+                                   (at + spec.name.size() == message.size() ||
+                                    !(std::isalnum(static_cast<unsigned char>(message[at + spec.name.size()])) || message[at + spec.name.size()] == '_'));
+                if (whole) message.replace(at, spec.name.size(), flag);
+            }
+        }
+        throw InputError(message);
+    }
+}
+
+int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
+    validate_in_flag_names(args.parameters);
+    if (args.output.empty()) args.output = default_output_name(args.input);
+    args.output = in_output_dir(args.output_dir, args.output);
+    args.raw_output = in_output_dir(args.output_dir, raw_output_pattern(args.raw_output, args.output));
+    if (!args.output_dir.empty()) {
+        std::error_code error;
+        std::filesystem::create_directories(path_from_utf8(args.output_dir), error);
+        if (error) throw InputError("--output-dir '" + args.output_dir + "': cannot create the folder (" + error.message() + ")");
+    }
+
+    std::vector<FrameJob> jobs;
+    std::vector<std::string> duplicates;
     const bool sequence = is_sequence(args.input);
+    std::optional<FramePattern> input_pattern;
     if (sequence) {
-        if (!args.output.empty() && !is_sequence(args.output)) throw InputError("output '" + args.output + "' needs '{}' for a sequence input");
+        if (!is_sequence(args.output))
+            throw InputError("output '" + args.output + "' needs {} or #### for the frame number of a sequence input");
         if (!args.raw_output.empty() && !is_sequence(args.raw_output))
-            throw InputError("--output-raw-mesh '" + args.raw_output + "' needs '{}' for a sequence input");
-        std::vector<Frame> found = find_frames(args.input);
+            throw InputError("--output-raw-mesh '" + args.raw_output + "' needs {} or #### for the frame number of a sequence input");
+        input_pattern = parse_frame_pattern(args.input);
+        std::vector<Frame> found = find_frames(*input_pattern, args.input, duplicates);
         const long first = args.start ? *args.start : (found.empty() ? 0 : found.front().number);
         const long last = args.end ? *args.end : (found.empty() ? -1 : found.back().number);
         std::map<long, Frame> by_number;
@@ -274,64 +390,99 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
         // Every frame of the range is attempted; one that is missing is reported like a broken one.
         for (long n = first; n <= last; ++n) {
             auto it = by_number.find(n);
-            frames.push_back(it != by_number.end() ? it->second : Frame{n, std::to_string(n), ""});
+            const Frame frame = it != by_number.end() ? it->second : Frame{n, std::to_string(n), ""};
+            jobs.push_back({frame, output_path(args.output, frame), args.raw_output.empty() ? "" : output_path(args.raw_output, frame)});
         }
-        if (frames.empty()) throw InputError("no frames match '" + args.input + "'");
+        if (jobs.empty()) throw InputError("no frames match '" + args.input + "'");
     } else {
-        frames.push_back({0, "", args.input});
+        jobs.push_back({{0, "", args.input}, args.output, args.raw_output});
     }
 
-    Progress progress(frames.size(), !args.quiet && is_terminal(stderr));
+    // --mt-files: frames in parallel, each on its share of the threads (one with --mt-particles=off).
+    const int threads = resolve_threads(args.parameters.execution.threads);
+    const int workers = args.frames_in_parallel ? std::max(1, std::min<int>(threads, static_cast<int>(jobs.size()))) : 1;
+    ReconstructArgs frame_args = args;
+    frame_args.parameters.execution.threads = args.threads_per_frame ? std::max(1, threads / workers) : 1;
+
+    Progress progress(jobs.size(), !args.quiet && is_terminal(stderr));
+    for (const std::string& duplicate : duplicates) progress.message("warning: " + duplicate);
+    if (args.double_precision)
+        progress.message("note: -d/--double-precision has no effect in Meniscus: in splashsurf itself, double precision moves "
+                         "vertices by at most 0.4 % of a cube (median 0.001 %) and gives the same triangles (README, Command line)");
+    std::vector<json> records(jobs.size());
+    std::atomic<std::size_t> next{0}, done{0}, failed{0};
+    std::atomic<bool> interrupted{false};
+    std::mutex hooks_mutex;
+    auto work = [&] {
+        while (!interrupted) {
+            {
+                std::lock_guard<std::mutex> lock(hooks_mutex);
+                // Between frames: a frame once started runs to its end.
+                if (hooks.interrupted && hooks.interrupted()) interrupted = true;
+            }
+            const std::size_t index = next++;
+            if (interrupted || index >= jobs.size()) return;
+            const FrameJob& job = jobs[index];
+            const Frame& frame = job.frame;
+            json record;
+            try {
+                if (frame.path.empty())
+                    throw InputError("frame " + std::to_string(frame.number) + " is missing (" + input_pattern->path(frame.number) + ")");
+                record = run_frame(frame_args, frame.path, job.output, job.raw_output, progress);
+                if (record.contains("failed")) ++failed;
+            } catch (const std::exception& e) {
+                ++failed;
+                progress.message(std::string("error: ") + e.what() + (sequence ? " (skipped; the sequence goes on)" : ""));
+                record = {{"input", frame.path}, {"failed", e.what()}};
+            }
+            if (sequence) record["frame"] = frame.number;
+            records[index] = std::move(record);
+            progress.update(++done, sequence ? "frame " + std::to_string(frame.number) : path_to_utf8(path_from_utf8(frame.path).filename()));
+        }
+    };
+    const auto start = std::chrono::steady_clock::now();
+    if (workers == 1) {
+        work();
+    } else {
+        std::vector<std::thread> pool;
+        for (int w = 0; w < workers; ++w) pool.emplace_back(work);
+        for (auto& thread : pool) thread.join();
+    }
+    if (interrupted) progress.message("interrupted: " + std::to_string(done.load()) + " of " + std::to_string(jobs.size()) + " frames done");
+
     json report;
     report["parameters"] = json::object();
     for (const ParameterSpec& spec : parameter_schema()) {
+        if (spec.is_vector()) {
+            const auto vector = spec.get_vector(args.parameters);
+            report["parameters"][spec.name] = vector ? json(std::vector<double>(vector->begin(), vector->end())) : json(nullptr);
+            continue;
+        }
         const double value = spec.get(args.parameters);
         if (spec.type == ParameterType::flag)
             report["parameters"][spec.name] = value != 0.0;
         else
             report["parameters"][spec.name] = value;
     }
-    report["parameters"]["threads_used"] = resolve_threads(args.parameters.execution.threads);
+    report["parameters"]["threads_used"] = threads;
+    report["parameters"]["frames_in_parallel"] = workers;
     report["frames"] = json::array();
-    std::size_t failed = 0, done = 0;
-    const auto start = std::chrono::steady_clock::now();
-    bool interrupted = false;
-    for (const Frame& frame : frames) {
-        if (hooks.interrupted && hooks.interrupted()) {  // between frames: a frame once started runs to its end
-            progress.message("interrupted: " + std::to_string(done) + " of " + std::to_string(frames.size()) + " frames done");
-            interrupted = true;
-            break;
-        }
-        const std::string label = sequence ? "frame " + std::to_string(frame.number) : path_to_utf8(path_from_utf8(frame.path).filename());
-        json record;
-        try {
-            if (frame.path.empty()) throw InputError("frame " + std::to_string(frame.number) + " is missing (" + substitute(args.input, "<" + std::to_string(frame.number) + ">") + ")");
-            record = run_frame(args, frame.path, sequence ? substitute(args.output, frame.digits) : args.output,
-                               sequence ? substitute(args.raw_output, frame.digits) : args.raw_output, progress);
-            if (record.contains("failed")) ++failed;
-        } catch (const std::exception& e) {
-            ++failed;
-            progress.message(std::string("error: ") + e.what() + (sequence ? " (skipped; the sequence goes on)" : ""));
-            record = {{"input", frame.path}, {"failed", e.what()}};
-        }
-        if (sequence) record["frame"] = frame.number;
-        report["frames"].push_back(record);
-        progress.update(++done, label);
-    }
+    for (json& record : records)
+        if (!record.is_null()) report["frames"].push_back(std::move(record));
     report["total_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    report["failed_frames"] = failed;
+    report["failed_frames"] = failed.load();
     report["peak_memory_bytes"] = peak_rss_bytes();
     if (!args.stats_path.empty()) {
         std::ofstream out(path_from_utf8(args.stats_path));
         out << report.dump(2) << "\n";
         if (!out) throw FormatError(args.stats_path + ": cannot write the statistics file");
     }
-    if (!args.quiet && frames.size() == 1 && !failed) {
+    if (!args.quiet && jobs.size() == 1 && !failed && !report["frames"].empty()) {
         const json& r = report["frames"][0];
         std::fprintf(stderr, "%s: %.0f particles -> %.0f triangles in %.3f s\n", args.input.c_str(), r["counts"]["particles"].get<double>(),
                      r["counts"]["triangles"].get<double>(), r["seconds"]["total"].get<double>());
     }
-    if (failed) std::fprintf(stderr, "%zu of %zu frames failed\n", failed, frames.size());
+    if (failed) std::fprintf(stderr, "%zu of %zu frames failed\n", failed.load(), jobs.size());
     if (interrupted) return kExitInterrupted;
     return failed ? 1 : 0;
 }
@@ -391,16 +542,29 @@ int run_cli(const std::vector<std::string>& arguments, const CliHooks& hooks) {
 
     ReconstructArgs args;
     CLI::App* reconstruct = app.add_subcommand("reconstruct", "Reconstruct the surface of a particle file or sequence");
-    reconstruct->add_option("input", args.input, "Particle file (VTK, VTU, BGEO, PLY, XYZ, NPY/NPZ, CSV); '{}' in the name stands for the frame number")->required();
-    reconstruct->add_option("-o,--output-file", args.output, "Output mesh (.ply, .obj, .vtk); '{}' for the frame number")->required();
+    reconstruct->add_option("input", args.input,
+                            "Particle file (VTK, VTU, BGEO, Houdini JSON, PLY, XYZ, NPY/NPZ, CSV); {} or #### in the name "
+                            "stands for the frame number")->required();
+    reconstruct->add_option("-o,--output-file", args.output,
+                            "Output mesh (.ply, .obj, .vtk); {} or #### for the frame number (default: {input name}_surface.vtk)");
+    reconstruct->add_option("--output-dir", args.output_dir, "Folder for the output files (created if missing; default: the current folder)");
     reconstruct->add_option("-s,--start-index", args.start, "First frame of a sequence");
     reconstruct->add_option("-e,--end-index", args.end, "Last frame of a sequence");
     reconstruct->add_option("--stats", args.stats_path, "Write per-stage seconds, counts and peak memory as JSON");
-    reconstruct->add_option("-a,--interpolate-attribute", args.attributes,
+    reconstruct->add_option("-a,--interpolate-attribute,--interpolate_attribute", args.attributes,
                             "Particle attribute to carry onto the mesh (repeatable); whole-number fields (ids) come from the "
                             "nearest particle");
-    reconstruct->add_option("--output-raw-mesh", args.raw_output, "Also write the mesh before post-processing");
-    reconstruct->add_flag("--check-mesh", args.check, "Check closed, manifold, oriented; a failing frame is reported");
+    reconstruct->add_option("--output-raw-mesh", args.raw_output,
+                            "Also write the mesh before post-processing: a path ({} for the frame number), or on for "
+                            "<output>_raw beside the output");
+    add_switch(*reconstruct, "--check-mesh", args.check, "Check closed, manifold, oriented; a failing frame is reported");
+    for (const char* check : {"--check-mesh-closed", "--check-mesh-manifold", "--check-mesh-orientation"})
+        add_switch(*reconstruct, check, args.check, "Same as --check-mesh (which checks all three)")->group("splashsurf compatibility");
+    add_switch(*reconstruct, "--mt-files", args.frames_in_parallel,
+               "Reconstruct several frames of a sequence at once, sharing the threads (faster for many small frames)");
+    add_switch(*reconstruct, "--mt-particles", args.threads_per_frame,
+               "Use several threads within each frame (off with --mt-files: one thread per frame)");
+    add_compatibility_flags(*reconstruct, args);
     add_parameter_flags(*reconstruct, args.parameters);
     reconstruct->add_flag("-q,--quiet", args.quiet, "No progress bar or summary");
 
@@ -412,8 +576,18 @@ int run_cli(const std::vector<std::string>& arguments, const CliHooks& hooks) {
     inspect->add_option("--json", json_path, "Write the report as JSON");
     inspect->add_option("-n,--threads", inspect_threads, "Threads (0: all cores)");
 
+    // splashsurf's command lines write short options as -r=0.025; CLI11 reads that as the value "=0.025".
+    std::vector<std::string> split;
+    for (const auto& argument : arguments) {
+        if (argument.size() > 3 && argument[0] == '-' && argument[1] != '-' && argument[2] == '=') {
+            split.push_back(argument.substr(0, 2));
+            split.push_back(argument.substr(3));
+        } else {
+            split.push_back(argument);
+        }
+    }
     std::vector<const char*> argv;
-    for (const auto& argument : arguments) argv.push_back(argument.c_str());
+    for (const auto& argument : split) argv.push_back(argument.c_str());
     try {
         app.parse(static_cast<int>(argv.size()), argv.data());
     } catch (const CLI::ParseError& e) {

@@ -9,11 +9,13 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "cli.h"
 #include "base/errors.h"
+#include "io/frame_pattern.h"
 #include "io/io.h"
 #include "parameters.h"
 #include "pipeline.h"
@@ -99,6 +101,8 @@ py::dict mesh_to_dict(TriMesh&& mesh) {
     out["vertices"] = to_numpy(std::move(mesh.vertices), {v, 3});
     out["triangles"] = to_numpy(std::move(mesh.triangles), {f, 3});
     out["normals"] = has_normals ? py::object(to_numpy(std::move(mesh.normals), {v, 3})) : py::object(py::none());
+    const py::ssize_t q = static_cast<py::ssize_t>(mesh.num_quads());
+    out["quads"] = to_numpy(std::move(mesh.quads), {q, 4});
     out["attributes"] = attributes_to_dict(std::move(mesh.attributes));
     return out;
 }
@@ -136,10 +140,31 @@ double value_from_python(const ParameterSpec& spec, const py::handle& value) {
 
 // Keyword arguments -> parameters: the one place Python values meet the schema. Unknown names, wrong types and
 // values outside the allowed range are refused naming the keyword; a parameter not given keeps its default.
+// A box corner: None (unset) or three numbers.
+std::optional<Vector3> vector_from_python(const ParameterSpec& spec, const py::handle& value) {
+    if (value.is_none()) return std::nullopt;
+    const std::string got = py::repr(value).cast<std::string>();
+    if (!py::isinstance<py::sequence>(value) || py::isinstance<py::str>(value) || py::len(value) != 3)
+        throw InputError(spec.name + " must be None or three numbers (x, y, z), got " + got);
+    Vector3 out{};
+    const py::sequence items = py::reinterpret_borrow<py::sequence>(value);
+    for (int k = 0; k < 3; ++k) {
+        if (!PyNumber_Check(items[k].ptr())) throw InputError(spec.name + " must be None or three numbers (x, y, z), got " + got);
+        out[k] = py::float_(items[k]).cast<double>();
+    }
+    return out;
+}
+
 Parameters parameters_from_python(const py::dict& values) {
     Parameters parameters;
     for (const auto& item : values) {
         const ParameterSpec& spec = find_parameter(py::str(item.first));
+        if (spec.is_vector()) {
+            const std::optional<Vector3> vector = vector_from_python(spec, item.second);
+            if (auto problem = spec.problem(vector)) throw InputError(spec.name + " " + *problem);
+            spec.set_vector(parameters, vector);
+            continue;
+        }
         const double value = value_from_python(spec, item.second);
         if (auto problem = spec.problem(value)) throw InputError(spec.name + " " + *problem);
         spec.set(parameters, value);
@@ -188,7 +213,8 @@ py::dict read_particle_file(const std::string& path) {
     return out;
 }
 
-TriMesh mesh_from_arrays(const py::array& vertices, const py::array& triangles, const py::object& normals, const py::dict& attributes) {
+TriMesh mesh_from_arrays(const py::array& vertices, const py::array& triangles, const py::object& normals, const py::dict& attributes,
+                         const py::object& quads = py::none()) {
     require_float_array(vertices, "vertices", false, 3);
     if (!triangles.dtype().is(py::dtype::of<int32_t>()) || !(triangles.flags() & py::array::c_style) || triangles.ndim() != 2 || triangles.shape(1) != 3)
         throw InputError("triangles must be a C-contiguous int32 array of shape (F, 3)");
@@ -197,9 +223,16 @@ TriMesh mesh_from_arrays(const py::array& vertices, const py::array& triangles, 
     mesh.vertices.assign(v, v + vertices.size());
     const int32_t* t = static_cast<const int32_t*>(triangles.data());
     mesh.triangles.assign(t, t + triangles.size());
-    for (int32_t index : mesh.triangles)
-        if (index < 0 || static_cast<std::size_t>(index) >= mesh.num_vertices())
-            throw InputError("triangles refer to vertex " + std::to_string(index) + " but there are " + std::to_string(mesh.num_vertices()) + " vertices");
+    if (!quads.is_none()) {
+        const py::array q = py::reinterpret_borrow<py::array>(quads);
+        if (!q.dtype().is(py::dtype::of<int32_t>()) || !(q.flags() & py::array::c_style) || q.ndim() != 2 || q.shape(1) != 4)
+            throw InputError("quads must be a C-contiguous int32 array of shape (Q, 4)");
+        mesh.quads.assign(static_cast<const int32_t*>(q.data()), static_cast<const int32_t*>(q.data()) + q.size());
+    }
+    for (const std::vector<int32_t>* faces : {&mesh.triangles, &mesh.quads})
+        for (int32_t index : *faces)
+            if (index < 0 || static_cast<std::size_t>(index) >= mesh.num_vertices())
+                throw InputError("faces refer to vertex " + std::to_string(index) + " but there are " + std::to_string(mesh.num_vertices()) + " vertices");
     if (!normals.is_none()) {
         const py::array n = py::reinterpret_borrow<py::array>(normals);
         require_float_array(n, "normals", false, 3);
@@ -257,8 +290,8 @@ int run_cli_in_python(const std::vector<std::string>& arguments) {
 }
 
 py::list schema_to_list() {
-    static const char* const kTypes[] = {"flag", "count", "real"};
-    static const char* const kCliStyles[] = {"value", "on_off", "flag"};
+    static const char* const kTypes[] = {"flag", "count", "real", "vector3"};
+    static const char* const kCliStyles[] = {"value", "on_off"};
     py::list out;
     for (const auto& spec : parameter_schema()) {
         py::dict d;
@@ -270,7 +303,7 @@ py::list schema_to_list() {
         d["cli_style"] = kCliStyles[static_cast<int>(spec.cli_style)];
         d["unit"] = spec.unit;
         d["help"] = spec.help;
-        d["default"] = spec.default_value();
+        d["default"] = spec.is_vector() ? py::object(py::none()) : py::object(py::float_(spec.default_value()));
         d["minimum"] = spec.minimum;
         d["maximum"] = spec.maximum;
         d["minimum_open"] = spec.minimum_open;
@@ -312,13 +345,39 @@ PYBIND11_MODULE(_core, m) {
           "Runs the pipeline on (N, 3) float32/float64 positions with parameters named as in parameter_schema(); "
           "returns a dict of numpy arrays and stats.");
     m.def("parameter_schema", &schema_to_list, "Every pipeline parameter: name, type, default, range, unit, help, spellings.");
-    m.def("parameter_problem", [](const std::string& name, double value) -> py::object {
-        const auto problem = find_parameter(name).problem(value);
+    m.def("parameter_problem", [](const std::string& name, const py::object& value) -> py::object {
+        const ParameterSpec& spec = find_parameter(name);
+        std::optional<std::string> problem;
+        try {
+            problem = spec.is_vector() ? spec.problem(vector_from_python(spec, value)) : spec.problem(value_from_python(spec, value));
+        } catch (const InputError& error) {
+            const std::string message = error.what();
+            problem = message.substr(std::min(message.size(), spec.name.size() + 1));
+        }
         return problem ? py::object(py::str(*problem)) : py::object(py::none());
     }, py::arg("name"), py::arg("value"), "What is wrong with a value for a parameter ('must be ..., got ...'), or None.");
     m.def("format_number", &format_number, py::arg("value"), "A number as people write it (0, 0.5, 2.5e-06).");
     m.def("run_cli", &run_cli_in_python, py::arg("arguments"),
           "Runs the meniscus command line (arguments[0] is the program name); returns the exit status.");
+    // Frame patterns (io/frame_pattern.h): the rule the command line uses, for the Python API and the add-on.
+    m.def("parse_frame_pattern", [](const std::string& path, std::optional<std::vector<std::string>> sibling_names) {
+        const FramePattern p = parse_frame_pattern(path, sibling_names);
+        return py::make_tuple(p.directory, p.prefix, p.suffix, p.padding);
+    }, py::arg("path"), py::arg("sibling_names") = py::none(),
+          "(directory, prefix, suffix, padding) of a '{}' / '####' pattern or a concrete numbered file.");
+    m.def("match_frame", [](const std::string& prefix, const std::string& suffix, const std::string& name) -> py::object {
+        const auto frame = FramePattern{"", prefix, suffix, 0}.match(name);
+        return frame ? py::object(py::int_(*frame)) : py::object(py::none());
+    }, py::arg("prefix"), py::arg("suffix"), py::arg("name"), "The frame number a file name stands for, or None.");
+    m.def("list_frames", [](const std::string& directory, const std::string& prefix, const std::string& suffix, int padding) {
+        FrameListing listing;
+        {
+            py::gil_scoped_release release;
+            listing = list_frames(FramePattern{directory, prefix, suffix, padding});
+        }
+        return py::make_tuple(listing.frames, listing.duplicates);
+    }, py::arg("directory"), py::arg("prefix"), py::arg("suffix"), py::arg("padding"),
+          "({frame: path}, duplicate notes) of the files of a pattern in its folder.");
     m.def("read_particles", &read_particle_file, py::arg("path"), "Reads a particle file: dict with 'positions' (N, 3) float32 and 'attributes'.");
     m.def("read_mesh", [](const std::string& path) {
         TriMesh mesh;
@@ -329,11 +388,12 @@ PYBIND11_MODULE(_core, m) {
         return mesh_to_dict(std::move(mesh));
     }, py::arg("path"));
     m.def("write_mesh", [](const std::string& path, const py::array& vertices, const py::array& triangles, const py::object& normals,
-                           const py::dict& attributes) {
-        TriMesh mesh = mesh_from_arrays(vertices, triangles, normals, attributes);
+                           const py::dict& attributes, const py::object& quads) {
+        TriMesh mesh = mesh_from_arrays(vertices, triangles, normals, attributes, quads);
         py::gil_scoped_release release;
         write_mesh(mesh, path);
-    }, py::arg("path"), py::arg("vertices"), py::arg("triangles"), py::arg("normals") = py::none(), py::arg("attributes") = py::dict());
+    }, py::arg("path"), py::arg("vertices"), py::arg("triangles"), py::arg("normals") = py::none(), py::arg("attributes") = py::dict(),
+       py::arg("quads") = py::none());
     m.def("check_mesh", [](const py::array& vertices, const py::array& triangles) {
         TriMesh mesh = mesh_from_arrays(vertices, triangles, py::none(), py::dict());
         MeshCheck check;

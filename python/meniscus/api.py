@@ -46,9 +46,18 @@ class Mesh:
     stats: dict = field(default_factory=dict)  # {"seconds": {stage: s}, "counts": {...}, "warnings": [...]}
     raw: Optional["Mesh"] = None               # the marching-cubes mesh, when keep_raw_mesh=True
     weights_normalization: float = 0.0         # N_HS used by the feature weights
+    quads: Optional[np.ndarray] = None         # (Q, 4) int32 with generate_quads: merged triangle pairs, same winding
 
     def write(self, path: str) -> None:
         write_mesh(self, path)
+
+    def all_triangles(self) -> np.ndarray:
+        """The triangles with every quad split back into two (for tools that take triangles only)."""
+        if self.quads is None or len(self.quads) == 0:
+            return np.ascontiguousarray(self.triangles, dtype=np.int32)
+        quads = np.asarray(self.quads, dtype=np.int32)
+        return np.concatenate([np.asarray(self.triangles, dtype=np.int32).reshape(-1, 3),
+                               quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
 
 
 def _attribute_array(values) -> np.ndarray:
@@ -61,7 +70,9 @@ def _attribute_array(values) -> np.ndarray:
 
 
 def _mesh(result: dict) -> Mesh:
-    return Mesh(result["vertices"], result["triangles"], result["normals"], result["attributes"])
+    quads = result.get("quads")
+    return Mesh(result["vertices"], result["triangles"], result["normals"], result["attributes"],
+                quads=quads if quads is not None and len(quads) else None)
 
 
 def read_particles(path) -> Particles:
@@ -119,8 +130,9 @@ def write_mesh(mesh: Mesh, path) -> None:
     """Writes .ply (binary, normals and attributes), .obj or .vtk, chosen by the extension."""
     attributes = {k: _attribute_array(v) for k, v in mesh.attributes.items()}
     normals = None if mesh.normals is None else np.ascontiguousarray(mesh.normals, dtype=np.float32)
+    quads = None if mesh.quads is None else np.ascontiguousarray(mesh.quads, dtype=np.int32)
     _core.write_mesh(str(path), np.ascontiguousarray(mesh.vertices, dtype=np.float32),
-                     np.ascontiguousarray(mesh.triangles, dtype=np.int32), normals, attributes)
+                     np.ascontiguousarray(mesh.triangles, dtype=np.int32), normals, attributes, quads)
 
 
 def read_mesh(path) -> Mesh:
@@ -129,11 +141,9 @@ def read_mesh(path) -> Mesh:
 
 def check_mesh(mesh: Mesh) -> dict:
     """Closed, manifold (edges and vertex fans), oriented, degenerate triangles: a dict of counts and flags."""
-    return _core.check_mesh(np.ascontiguousarray(mesh.vertices, dtype=np.float32),
-                            np.ascontiguousarray(mesh.triangles, dtype=np.int32))
+    return _core.check_mesh(np.ascontiguousarray(mesh.vertices, dtype=np.float32), mesh.all_triangles())
 
 
 def assess_quality(mesh: Mesh, threads: int = 0) -> dict:
     """Quality report: check, volume, components, bumpiness, normal angles, valences, barnacle counts."""
-    return _core.assess_quality(np.ascontiguousarray(mesh.vertices, dtype=np.float32),
-                                np.ascontiguousarray(mesh.triangles, dtype=np.int32), int(threads))
+    return _core.assess_quality(np.ascontiguousarray(mesh.vertices, dtype=np.float32), mesh.all_triangles(), int(threads))

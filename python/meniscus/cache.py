@@ -55,6 +55,8 @@ def save_mesh(mesh: api.Mesh, path: str) -> None:
                       "triangles": np.ascontiguousarray(mesh.triangles, dtype=np.int32)}
             if mesh.normals is not None:
                 arrays["normals"] = np.ascontiguousarray(mesh.normals, dtype=np.float32)
+            if mesh.quads is not None and len(mesh.quads):
+                arrays["quads"] = np.ascontiguousarray(mesh.quads, dtype=np.int32)
             for name, values in mesh.attributes.items():
                 values = np.asarray(values)  # whole-number attributes (ids) stay int32
                 arrays[_NPZ_ATTRIBUTE_PREFIX + name] = np.ascontiguousarray(
@@ -80,13 +82,15 @@ def load_mesh(path: str) -> api.Mesh:
                 vertices = data["vertices"].reshape(-1, 3)
                 triangles = data["triangles"].reshape(-1, 3)
                 normals = data["normals"].reshape(-1, 3) if "normals" in data.files else None
+                quads = data["quads"].reshape(-1, 4) if "quads" in data.files else None
                 attributes = {key[len(_NPZ_ATTRIBUTE_PREFIX):]: data[key] for key in data.files
                               if key.startswith(_NPZ_ATTRIBUTE_PREFIX)}
         except (KeyError, ValueError, EOFError) as error:  # zip damage, missing arrays, wrong shapes
             raise api.FormatError(f"{path}: not a Meniscus mesh cache file ({error})") from None
-        if len(triangles) and (triangles.min() < 0 or triangles.max() >= len(vertices)):
-            raise api.FormatError(f"{path}: triangle indices out of range")
-        return api.Mesh(vertices, triangles, normals, attributes)
+        for faces in (triangles, quads if quads is not None else triangles[:0]):
+            if len(faces) and (faces.min() < 0 or faces.max() >= len(vertices)):
+                raise api.FormatError(f"{path}: face indices out of range")
+        return api.Mesh(vertices, triangles, normals, attributes, quads=quads)
     return api.read_mesh(path)
 
 

@@ -8,26 +8,24 @@ Three spellings are accepted and mean the same thing:
     fluid_0001.bgeo       a concrete file; the last run of digits before the extension is the frame number
     fluid_####.bgeo       '#' repeated: the number padded with zeros to that many digits
     fluid_{}.bgeo         splashsurf's spelling: the number without padding
+
+Which name is which frame (detection, listing, the choice between two spellings of one number) is the core's rule
+(native/core/io/frame_pattern.h), the same the command line applies.
 """
 from __future__ import annotations
 
 import math
 import os
-import re
 from dataclasses import dataclass, field
 from typing import Dict, Iterable, List, Optional, Tuple
+
+from . import _core
 
 # Out-of-range modes: what a scene frame outside [start, end] (after the offset) shows.
 HOLD = "HOLD"    # the first / last frame of the range
 LOOP = "LOOP"    # wrap around, so the range repeats forever
 BLANK = "BLANK"  # nothing: the surface is empty
 OUT_OF_RANGE_MODES = (HOLD, LOOP, BLANK)
-
-# Extensions are letters then letters/digits (".vtk", ".bgeo.gz", ".h5"): stripping them first keeps a digit in an
-# extension from being taken for the frame number.
-_EXTENSION = re.compile(r"(\.[A-Za-z][A-Za-z0-9]*)+$")
-_HASHES = re.compile(r"#+")
-_LAST_DIGITS = re.compile(r"(\d+)(?!.*\d)")
 
 
 @dataclass(frozen=True)
@@ -55,36 +53,16 @@ class FramePattern:
 
     def match(self, file_name: str) -> Optional[Tuple[int, str]]:
         """The frame number and its digits when file_name belongs to this sequence, else None."""
-        if not (file_name.startswith(self.prefix) and file_name.endswith(self.suffix)):
+        frame = _core.match_frame(self.prefix, self.suffix, file_name)
+        if frame is None:
             return None
-        digits = file_name[len(self.prefix):len(file_name) - len(self.suffix)]
-        # Frame numbers are non-negative: '-' is left to the prefix ('frame-0001'), digits only.
-        if not digits or not digits.isascii() or not digits.isdigit():
-            return None
-        return int(digits), digits
+        return frame, file_name[len(self.prefix):len(file_name) - len(self.suffix)]
 
     def list_frames(self) -> Dict[int, str]:
-        """Maps every frame number found in the directory to its path, sorted by frame.
-
-        Tolerant of mixed spellings: 'fluid_7' and 'fluid_0007' both count as frame 7; when both exist, the one
-        spelled with this pattern's padding wins so the result does not depend on directory order.
-        """
-        try:
-            names = os.listdir(self.directory or ".")
-        except OSError:
-            return {}
-        found: Dict[int, Tuple[str, bool]] = {}  # frame -> (file name, spelled exactly)
-        for name in names:
-            matched = self.match(name)
-            if matched is None:
-                continue
-            frame = matched[0]
-            exact = name == self.file_name(frame)
-            previous = found.get(frame)
-            # Prefer the exact spelling; between two inexact ones take the smaller name, independent of listing order.
-            if previous is None or exact > previous[1] or (exact == previous[1] and name < previous[0]):
-                found[frame] = (name, exact)
-        return {frame: os.path.join(self.directory, found[frame][0]) for frame in sorted(found)}
+        """Maps every frame number found in the directory to its path, sorted by frame. Either spelling of a number
+        counts ('fluid_7', 'fluid_0007'); when both exist, the one with this pattern's padding wins."""
+        frames, _duplicates = _core.list_frames(self.directory, self.prefix, self.suffix, self.padding)
+        return frames
 
 
 def parse_pattern(path: str, sibling_names: Optional[Iterable[str]] = None) -> FramePattern:
@@ -94,43 +72,8 @@ def parse_pattern(path: str, sibling_names: Optional[Iterable[str]] = None) -> F
     the other files in the folder decide it (pass sibling_names to avoid listing the folder, e.g. in tests).
     Raises ValueError when the name holds no frame number.
     """
-    directory, name = os.path.split(path)
-    if not name:
-        raise ValueError(f"'{path}' names a folder, not a file")
-
-    if name.count("{}") == 1:
-        prefix, suffix = name.split("{}")
-        return FramePattern(directory, prefix, suffix, 0)
-    hashes = list(_HASHES.finditer(name))
-    if len(hashes) == 1:
-        run = hashes[0]
-        return FramePattern(directory, name[:run.start()], name[run.end():], run.end() - run.start())
-    if len(hashes) > 1 or name.count("{}") > 1:
-        raise ValueError(f"'{name}' has more than one frame-number placeholder")
-
-    extension = _EXTENSION.search(name)
-    stem_end = extension.start() if extension else len(name)
-    number = _LAST_DIGITS.search(name[:stem_end])
-    if number is None:
-        raise ValueError(f"'{name}' contains no frame number (expected e.g. fluid_0001.bgeo, fluid_####.bgeo or "
-                         "fluid_{}.bgeo)")
-    prefix, digits, suffix = name[:number.start()], number.group(1), name[number.end():]
-    if len(digits) > 1 and digits.startswith("0"):
-        return FramePattern(directory, prefix, suffix, len(digits))
-
-    # No leading zero: 'fluid_10' may be unpadded or padded to two digits. Only a sibling with a leading zero
-    # ('fluid_01') proves padding; without one we choose unpadded, whose listing accepts padded names anyway.
-    if sibling_names is None:
-        try:
-            sibling_names = os.listdir(directory or ".")
-        except OSError:
-            sibling_names = ()
-    unpadded = FramePattern(directory, prefix, suffix, 0)
-    for sibling in sibling_names:
-        matched = unpadded.match(sibling)
-        if matched is not None and len(matched[1]) > 1 and matched[1].startswith("0"):
-            return FramePattern(directory, prefix, suffix, len(matched[1]))
-    return unpadded
+    siblings = None if sibling_names is None else [str(name) for name in sibling_names]
+    return FramePattern(*_core.parse_frame_pattern(str(path), siblings))
 
 
 def nearest_frame(scene_time: float) -> int:

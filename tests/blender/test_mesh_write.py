@@ -242,16 +242,36 @@ def test_clear_and_empty_inputs():
     check(not mesh.validate(), "empty mesh invalid")
 
 
+def _edges(triangles, vertex_count):
+    corners, following, _ = mesh_update._face_corners(triangles.astype(np.int32), np.zeros((0, 4), np.int32))
+    return mesh_update._compute_edges(corners, following, vertex_count)
+
+
 def test_edge_computation_branches_agree():
     vertices, triangles, _ = FRAME_B
-    packed = mesh_update._compute_edges(triangles, len(vertices))
+    packed = _edges(triangles, len(vertices))
     # A vertex count too large to pack the corner index next to the vertex pair takes the argsort branch.
-    sorted_ = mesh_update._compute_edges(triangles, 2 ** 31 - 1)
+    sorted_ = _edges(triangles, 2 ** 31 - 1)
     check(packed is not None and sorted_ is not None, "no edges")
     check(np.array_equal(packed[0], sorted_[0]) and np.array_equal(packed[1], sorted_[1]), "branches differ")
     check(bool(np.all(packed[0][:, 0] < packed[0][:, 1])), "edge vertices not ordered")
     degenerate = np.vstack([triangles, [(0, 0, 1)]]).astype(np.int32)
-    check(mesh_update._compute_edges(degenerate, len(vertices)) is None, "degenerate triangle not refused")
+    check(_edges(degenerate, len(vertices)) is None, "degenerate triangle not refused")
+
+
+def test_quads_and_triangles_together():
+    # A unit cube: 2 faces as quads, 4 as pairs of triangles; outward winding throughout.
+    vertices = np.array([(x, y, z) for z in (0, 1) for y in (0, 1) for x in (0, 1)], dtype=np.float32)
+    quads = np.array([(0, 2, 3, 1), (4, 5, 7, 6)], dtype=np.int32)  # bottom (-z), top (+z)
+    triangles = np.array([(0, 1, 5), (0, 5, 4), (1, 3, 7), (1, 7, 5), (3, 2, 6), (3, 6, 7), (2, 0, 4), (2, 4, 6)],
+                         dtype=np.int32)
+    mesh_update.write_surface(mesh, vertices, triangles, None, {}, quads)
+    sizes = sorted(len(polygon.vertices) for polygon in mesh.polygons)
+    check(sizes == [3] * 8 + [4] * 2, sizes)
+    check(len(mesh.edges) == 12 + 4, f"{len(mesh.edges)} edges, want the cube's 12 and 4 triangle diagonals")
+    check(not mesh.validate(), "validate() changed the mesh")
+    corners = mesh_update.read_corner_normals(mesh)
+    check(corners.shape == (8 * 3 + 2 * 4, 3), corners.shape)
 
 
 def test_degenerate_triangle_falls_back_to_blender():

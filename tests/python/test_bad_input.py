@@ -70,7 +70,8 @@ def test_gaps_and_broken_frames_are_reported_and_skipped(cli, frames, tmp_path):
 
 
 def test_duplicate_frame_numbers_use_one_file_deterministically(cli, frames, tmp_path):
-    # fluid_7 and fluid_007 are both frame 7: the first name in sorted order is used, every time.
+    # fluid_7 and fluid_007 are both frame 7: the pattern's own spelling ({} is unpadded) is used, every time, as in the
+    # Python API and the add-on (one rule, io/frame_pattern.h), with a warning naming both.
     shutil.copy(VARIANTS / "binary.bgeo", frames / "fluid_7.bgeo")
     shutil.copy(VARIANTS / "binary.bgeo", frames / "fluid_007.bgeo")
     shutil.copy(VARIANTS / "binary.bgeo", frames / "fluid_8.bgeo")
@@ -79,8 +80,9 @@ def test_duplicate_frame_numbers_use_one_file_deterministically(cli, frames, tmp
     assert result.returncode == 0, result.stderr
     report = json.loads(stats.read_text())
     assert [f["frame"] for f in report["frames"]] == [7, 8]
-    assert report["frames"][0]["input"].endswith("fluid_007.bgeo")
-    assert sorted(p.name for p in tmp_path.glob("out_*.ply")) == ["out_007.ply", "out_8.ply"]
+    assert report["frames"][0]["input"].endswith("fluid_7.bgeo")
+    assert "frame 7: fluid_007.bgeo and fluid_7.bgeo; using fluid_7.bgeo" in result.stderr
+    assert sorted(p.name for p in tmp_path.glob("out_*.ply")) == ["out_7.ply", "out_8.ply"]
 
 
 def test_non_finite_coordinates_fail_with_a_count_or_are_skipped(cli, tmp_path):

@@ -1,5 +1,6 @@
 """The command-line tool: single frames, sequences with gaps and broken frames, stats, output formats."""
 import json
+import pathlib
 import shutil
 import subprocess
 
@@ -96,3 +97,51 @@ def test_every_frame_of_the_shared_sequence_passes_the_mesh_check(cli, shared, t
     failed = [(f["frame"], f.get("failed")) for f in report["frames"] if f.get("failed")]
     assert not failed and result.returncode == 0, (failed, result.stderr[-2000:])
     assert all(f["check"]["ok"] for f in report["frames"])
+
+
+@pytest.mark.parametrize("spelling, chosen", [("fluid_{}.vtk", "fluid_7.vtk"), ("fluid_####.vtk", "fluid_0007.vtk")])
+def test_command_line_and_add_on_pick_the_same_file_for_two_spellings_of_a_frame(cli, shared, tmp_path, spelling,
+                                                                                  chosen):
+    # Frame 7 written twice; the spelling of the pattern decides, in every interface (one rule in the core).
+    frames = shared / "splashsurf"
+    shutil.copy(frames / "double_dam_break_frame_01_4732_particles.vtk", tmp_path / "fluid_7.vtk")
+    shutil.copy(frames / "bunny_frame_14_7705_particles.vtk", tmp_path / "fluid_0007.vtk")
+    stats = tmp_path / "stats.json"
+    result = run(cli, "reconstruct", tmp_path / spelling, "-o", tmp_path / "out_{}.ply", "-r", 0.025, "-c", 1.0,
+                 "--stats", stats)
+    assert result.returncode == 0, result.stderr
+    assert "frame 7: fluid_0007.vtk and fluid_7.vtk; using " + chosen in result.stderr
+    assert pathlib.Path(json.loads(stats.read_text())["frames"][0]["input"]).name == chosen
+    from meniscus import sequence
+    assert pathlib.Path(sequence.parse_pattern(str(tmp_path / spelling)).list_frames()[7]).name == chosen
+
+
+def test_command_lines_from_splashsurfs_readme_run_unchanged(cli, shared, tmp_path):
+    # The benchmark lines of splashsurf's README, on a frame scaled to their radius 0.011 and stored as raw XYZ.
+    positions = meniscus.read_particles(shared / "splashsurf/double_dam_break_frame_26_4732_particles.vtk").positions
+    (positions * (0.011 / 0.025)).astype("<f4").tofile(tmp_path / "canyon_13353401_particles.xyz")
+    for line, output in [
+        ("reconstruct canyon_13353401_particles.xyz -r=0.011 -c=1.5 -l=2.0 -t=0.6 --output-dir=out",
+         "out/canyon_13353401_particles_surface.vtk"),
+        ("reconstruct canyon_13353401_particles.xyz -r=0.011 -c=1.5 -l=2.0 -t=0.6 --subdomain-grid=on",
+         "canyon_13353401_particles_surface.vtk"),
+    ]:
+        result = subprocess.run([cli, *line.split()], capture_output=True, text=True, cwd=tmp_path)
+        assert result.returncode == 0, f"{line}\n{result.stderr}"
+        assert (tmp_path / output).stat().st_size > 10000, output
+
+
+def test_frames_in_parallel_give_the_same_meshes(cli, shared, tmp_path):
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    for number in (30, 31, 32):
+        shutil.copy(shared / f"sequence/double_dam_break_{number:04d}.vtk", frames / f"fluid_{number}.vtk")
+    common = ["-r", "0.025", "-c", "1.0", "-q"]
+    serial = run(cli, "reconstruct", frames / "fluid_{}.vtk", "-o", tmp_path / "a_{}.ply", *common)
+    parallel = run(cli, "reconstruct", frames / "fluid_{}.vtk", "-o", tmp_path / "b_{}.ply", "--mt-files=on",
+                   "--mt-particles=off", "--stats", tmp_path / "stats.json", *common)
+    assert serial.returncode == 0 and parallel.returncode == 0, serial.stderr + parallel.stderr
+    report = json.loads((tmp_path / "stats.json").read_text())
+    assert report["parameters"]["frames_in_parallel"] == 2 and [f["frame"] for f in report["frames"]] == [30, 31, 32]
+    for number in (30, 31, 32):
+        assert (tmp_path / f"a_{number}.ply").read_bytes() == (tmp_path / f"b_{number}.ply").read_bytes()

@@ -1,4 +1,5 @@
-"""Tests of meniscus.sequence: frame patterns, folder listings and scene frame resolution (no bpy, no _core)."""
+"""Tests of meniscus.sequence: frame patterns, folder listings (the core's rule, shared with the CLI) and scene frame
+resolution (no bpy)."""
 import importlib.util
 import os
 import pathlib
@@ -6,13 +7,7 @@ import sys
 
 import pytest
 
-# Load the module from its source file: it has no dependencies, so these tests run before (or without) the
-# compiled core that `import meniscus` needs.
-_SOURCE = pathlib.Path(__file__).resolve().parents[2] / "python" / "meniscus" / "sequence.py"
-_spec = importlib.util.spec_from_file_location("meniscus_sequence_under_test", _SOURCE)
-sequence = importlib.util.module_from_spec(_spec)
-sys.modules[_spec.name] = sequence  # dataclasses look the module up by name
-_spec.loader.exec_module(sequence)
+from meniscus import sequence  # noqa: E402
 
 FramePattern = sequence.FramePattern
 parse_pattern = sequence.parse_pattern

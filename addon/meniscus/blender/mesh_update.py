@@ -69,27 +69,28 @@ def clear_surface(mesh):
     mesh.update()
 
 
-def write_surface(mesh, vertices, triangles, normals=None, point_attributes=None):
-    """Replaces the mesh's geometry by a triangle mesh; returns {attribute name: name stored under} for attributes
-    stored under another name (see RESERVED_NAMES) or not at all (None: a shape Blender has no type for).
+def write_surface(mesh, vertices, triangles, normals=None, point_attributes=None, quads=None):
+    """Replaces the mesh's geometry by a triangle (and quad) mesh; returns {attribute name: name stored under} for
+    attributes stored under another name (see RESERVED_NAMES) or not at all (None: a shape Blender has no type for).
 
-    vertices (V, 3) and triangles (F, 3) index arrays; normals (V, 3) unit vectors used as custom normals when
+    vertices (V, 3), triangles (F, 3) and quads (Q, 4, optional: the core's --generate-quads) index arrays; normals (V, 3) unit vectors used as custom normals when
     given; point_attributes maps names to (V,) float arrays (FLOAT point attributes, e.g. 'weights'), (V,) integer
     arrays (INT, e.g. particle ids carried from the nearest particle) or (V, 3) float arrays (FLOAT_VECTOR, e.g.
     'velocity'). clear_geometry() drops the attributes of the previous frame, so an attribute that is no longer
     produced does not linger with stale values.
     """
     vertex_count = len(vertices)
-    triangle_count = len(triangles)
+    triangles = np.ascontiguousarray(triangles, dtype=np.int32).reshape(-1, 3)
+    quads = np.zeros((0, 4), dtype=np.int32) if quads is None else np.ascontiguousarray(quads, dtype=np.int32).reshape(-1, 4)
     mesh.clear_geometry()
-    if vertex_count == 0 or triangle_count == 0:
+    if vertex_count == 0 or len(triangles) + len(quads) == 0:
         mesh.update()
         return {}
 
-    triangles = np.ascontiguousarray(triangles, dtype=np.int32).reshape(-1, 3)
     _write_vertices(mesh, vertices)
-    _write_faces(mesh, triangles)
-    edges = _compute_edges(triangles, vertex_count)
+    corners, following, sizes = _face_corners(triangles, quads)
+    _write_faces(mesh, corners, sizes)
+    edges = _compute_edges(corners, following, vertex_count)
     if edges is None:
         mesh.update(calc_edges=True)  # degenerate triangles: let Blender decide what their edges are
     else:
@@ -118,25 +119,44 @@ def _write_vertices(mesh, vertices):
         mesh.vertices.foreach_set("co", _flat(vertices, np.float32))
 
 
-def _write_faces(mesh, triangles):
-    """Corners (loops) and faces (polygons) of a (F, 3) int32 triangle array, every face smooth."""
-    triangle_count = len(triangles)
-    mesh.loops.add(3 * triangle_count)
+def _face_corners(triangles, quads):
+    """(corner vertices, each corner's next corner's vertex within its face, face sizes) of triangles then quads."""
+    corners = np.concatenate([triangles.reshape(-1), quads.reshape(-1)]) if len(quads) else triangles.reshape(-1)
+    following = []
+    for faces in (triangles, quads):
+        if len(faces):
+            following.append(np.roll(faces, -1, axis=1).reshape(-1))
+    sizes = (len(triangles), len(quads))
+    return corners, np.concatenate(following) if len(following) > 1 else following[0], sizes
+
+
+def _write_faces(mesh, corners, sizes):
+    """Corners (loops) and faces (polygons): sizes = (triangle count, quad count), triangles first, every face
+    smooth."""
+    triangle_count, quad_count = sizes
+    face_count = triangle_count + quad_count
+    mesh.loops.add(len(corners))
     if GEOMETRY_AS_ATTRIBUTES:
-        mesh.attributes[".corner_vert"].data.foreach_set("value", triangles.reshape(-1))
+        mesh.attributes[".corner_vert"].data.foreach_set("value", corners)
     else:
-        mesh.loops.foreach_set("vertex_index", _unsigned(triangles))
-    mesh.polygons.add(triangle_count)
-    mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * triangle_count, 3, dtype=np.uint32))
+        mesh.loops.foreach_set("vertex_index", _unsigned(corners))
+    mesh.polygons.add(face_count)
+    starts = np.arange(0, 3 * triangle_count, 3, dtype=np.uint32)
+    if quad_count:
+        starts = np.concatenate([starts, np.arange(3 * triangle_count, 3 * triangle_count + 4 * quad_count, 4,
+                                                   dtype=np.uint32)])
+    mesh.polygons.foreach_set("loop_start", starts)
     if POLYGON_LOOP_TOTAL_IS_STORED:
-        mesh.polygons.foreach_set("loop_total", np.full(triangle_count, 3, dtype=np.uint32))
+        totals = np.full(face_count, 3, dtype=np.uint32)
+        totals[triangle_count:] = 4
+        mesh.polygons.foreach_set("loop_total", totals)
     # A fluid surface has no hard edges: every face smooth, so shading interpolates the vertex normals.
     if GEOMETRY_AS_ATTRIBUTES:
         sharp_face = mesh.attributes.get("sharp_face")  # absent after clear_geometry: all faces smooth
         if sharp_face is not None:
             mesh.attributes.remove(sharp_face)
     else:
-        mesh.polygons.foreach_set("use_smooth", np.ones(triangle_count, dtype=bool))
+        mesh.polygons.foreach_set("use_smooth", np.ones(face_count, dtype=bool))
 
 
 def _int64_sort_kind():
@@ -160,19 +180,15 @@ def _int64_sort_kind():
 _SORT_KIND = _int64_sort_kind()
 
 
-def _compute_edges(triangles, vertex_count):
-    """(edges (E, 2) int32 with v0 < v1, corner_edges (3F,) int32) of a (F, 3) int32 triangle array, or None when a
-    triangle repeats a vertex (an edge from a vertex to itself, which Blender leaves out).
+def _compute_edges(corners, following, vertex_count):
+    """(edges (E, 2) int32 with v0 < v1, corner_edges (C,) int32) of the faces' corners, or None when a face repeats
+    a vertex (an edge from a vertex to itself, which Blender leaves out). following[i] is the vertex of the corner
+    after corner i in its face.
 
     Corner i's edge joins its vertex to the next corner's vertex of the same face, as Blender defines `.corner_edge`.
     The corners' (low, high) vertex pairs are sorted once, with the corner index packed into the low bits of the
     same int64 key when it fits (a plain sort is 2-3x faster than an argsort), and numbered in order.
     """
-    corners = triangles.reshape(-1)
-    following = np.empty_like(triangles)  # each corner's next corner in its face
-    following[:, :2] = triangles[:, 1:]
-    following[:, 2] = triangles[:, 0]
-    following = following.reshape(-1)
     low = np.minimum(corners, following)
     high = np.maximum(corners, following)
     if np.any(low == high):

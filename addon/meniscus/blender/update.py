@@ -117,10 +117,16 @@ def _write(mesh, settings, surface):
     note on attributes stored under another name or not at all (the user must find what they asked for)."""
     started = time.perf_counter()
     normals = surface.normals if settings.use_custom_normals else None
-    elsewhere = mesh_update.write_surface(mesh, surface.vertices, surface.triangles, normals, surface.attributes)
+    elsewhere = mesh_update.write_surface(mesh, surface.vertices, surface.triangles, normals, surface.attributes,
+                                          surface.quads)
     notes = [f"'{name}' stored as '{stored}'" if stored else f"'{name}' not stored (no Blender type for its shape)"
              for name, stored in sorted(elsewhere.items())]
     return time.perf_counter() - started, "; ".join(notes)
+
+
+def _face_counts(mesh):
+    quads = 0 if mesh.quads is None else len(mesh.quads)
+    return f"{len(mesh.triangles):,} triangles" + (f", {quads:,} quads" if quads else "")
 
 
 def _status_lines(*lines):
@@ -151,7 +157,7 @@ def _file_source(obj, settings, mesh, scene_time, for_render):
         return _status_lines(
             os.path.basename(lookup.path) + (" (render)" if for_render else ""),
             f"{result.particle_count:,} particles",
-            f"{len(result.mesh.triangles):,} triangles",
+            _face_counts(result.mesh),
             f"{result.seconds:.2f} s + {blender_seconds:.2f} s in Blender",
             _missing_note(result), attribute_note)
 
@@ -172,7 +178,7 @@ def _cache_source(obj, settings, mesh, scene_time):
         blender_seconds, attribute_note = _write(mesh, settings, surface)
         return _status_lines(
             f"{os.path.basename(lookup.path)} (cache)",
-            f"{len(surface.triangles):,} triangles",
+            _face_counts(surface),
             f"{loaded:.2f} s loading + {blender_seconds:.2f} s in Blender", attribute_note)
 
     return key, work
@@ -197,7 +203,7 @@ def _object_source(obj, settings, mesh, depsgraph, for_render):
         return _status_lines(
             f"{source.name}: {kind}" + (" (render)" if for_render else ""),
             f"{result.particle_count:,} particles",
-            f"{len(result.mesh.triangles):,} triangles",
+            _face_counts(result.mesh),
             f"{result.seconds:.2f} s + {blender_seconds:.2f} s in Blender",
             _missing_note(result), attribute_note)
 
