@@ -32,7 +32,7 @@
 #include "parameters.h"
 #include "pipeline.h"
 #include "base/platform.h"
-#include "post/postprocess.h"
+#include "analysis/quality.h"
 #include "surface/reconstruction.h"
 
 namespace fs = std::filesystem;

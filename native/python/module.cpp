@@ -19,7 +19,7 @@
 #include "io/io.h"
 #include "parameters.h"
 #include "pipeline.h"
-#include "post/postprocess.h"
+#include "analysis/quality.h"
 
 namespace py = pybind11;
 using namespace meniscus;
