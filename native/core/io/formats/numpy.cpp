@@ -13,165 +13,19 @@
 // other compression methods and encryption are refused by name.
 //
 // Object arrays (pickles) are never loaded: they could run code.
-#include <zlib.h>
-
 #include <algorithm>
 #include <memory>
 
 #include "io/io_util.h"
+#include "io/parsers/half_float.h"
+#include "io/parsers/python_literal.h"
+#include "io/parsers/zip.h"
 
 namespace meniscus {
 namespace io_detail {
 namespace {
 
-// ---- the header: a Python literal --------------------------------------------------------------------------
-
-struct PyValue {
-    enum class Kind { none, boolean, integer, string, sequence, dict } kind = Kind::none;
-    bool boolean = false;
-    std::int64_t integer = 0;
-    std::string string;
-    std::vector<PyValue> items;                           // tuple or list
-    std::vector<std::pair<std::string, PyValue>> entries;  // dict
-
-    const PyValue* get(std::string_view key) const {
-        for (const auto& e : entries)
-            if (e.first == key) return &e.second;
-        return nullptr;
-    }
-};
-
-class PyLiteralParser {
-public:
-    PyLiteralParser(const Cursor& c, std::string_view text, std::size_t base) : c_(c), text_(text), base_(base) {}
-
-    PyValue parse() {
-        PyValue v = value(0);
-        skip_space();
-        if (pos_ < text_.size()) fail("unexpected " + quote(text_.substr(pos_, 10)) + " after the header dictionary");
-        return v;
-    }
-
-private:
-    const Cursor& c_;
-    std::string_view text_;
-    std::size_t base_;  // file offset of text_[0], for messages
-    std::size_t pos_ = 0;
-
-    [[noreturn]] void fail(const std::string& what) const {
-        c_.fail("bad .npy header at " + c_.where(base_ + pos_) + ": " + what);
-    }
-
-    void skip_space() {
-        while (pos_ < text_.size() && Cursor::is_space(static_cast<unsigned char>(text_[pos_]))) ++pos_;
-    }
-
-    bool word(std::string_view w) {
-        if (text_.substr(pos_, w.size()) != w) return false;
-        pos_ += w.size();
-        return true;
-    }
-
-    PyValue value(int depth) {
-        if (depth > 16) fail("nested too deeply");
-        skip_space();
-        if (pos_ >= text_.size()) fail("it ends in the middle of a value");
-        PyValue v;
-        char ch = text_[pos_];
-        if (ch == '{') {
-            v.kind = PyValue::Kind::dict;
-            ++pos_;
-            while (true) {
-                skip_space();
-                if (pos_ < text_.size() && text_[pos_] == '}') {
-                    ++pos_;
-                    return v;
-                }
-                PyValue key = value(depth + 1);
-                if (key.kind != PyValue::Kind::string) fail("a dictionary key is not a string");
-                skip_space();
-                if (pos_ >= text_.size() || text_[pos_] != ':') fail("expected ':' after key " + quote(key.string));
-                ++pos_;
-                v.entries.emplace_back(key.string, value(depth + 1));
-                skip_space();
-                if (pos_ < text_.size() && text_[pos_] == ',') ++pos_;
-                else if (pos_ >= text_.size() || text_[pos_] != '}') fail("expected ',' or '}' in the dictionary");
-            }
-        }
-        if (ch == '(' || ch == '[') {
-            const char close = ch == '(' ? ')' : ']';
-            v.kind = PyValue::Kind::sequence;
-            ++pos_;
-            while (true) {
-                skip_space();
-                if (pos_ < text_.size() && text_[pos_] == close) {
-                    ++pos_;
-                    return v;
-                }
-                v.items.push_back(value(depth + 1));
-                skip_space();
-                if (pos_ < text_.size() && text_[pos_] == ',') ++pos_;
-                else if (pos_ >= text_.size() || text_[pos_] != close) fail(std::string("expected ',' or '") + close + "'");
-            }
-        }
-        if (ch == '\'' || ch == '"') {
-            v.kind = PyValue::Kind::string;
-            ++pos_;
-            while (pos_ < text_.size() && text_[pos_] != ch) {
-                if (text_[pos_] == '\\' && pos_ + 1 < text_.size()) ++pos_;
-                v.string += text_[pos_++];
-            }
-            if (pos_ >= text_.size()) fail("a string is not closed");
-            ++pos_;
-            return v;
-        }
-        if (ch == '-' || ch == '+' || (ch >= '0' && ch <= '9')) {
-            std::size_t start = pos_;
-            ++pos_;
-            while (pos_ < text_.size() && text_[pos_] >= '0' && text_[pos_] <= '9') ++pos_;
-            if (!parse_i64(text_.substr(start, pos_ - start), v.integer)) fail("bad integer " + quote(text_.substr(start, pos_ - start)));
-            if (pos_ < text_.size() && (text_[pos_] == 'L' || text_[pos_] == 'l')) ++pos_;  // Python 2 long
-            v.kind = PyValue::Kind::integer;
-            return v;
-        }
-        if (word("True")) {
-            v.kind = PyValue::Kind::boolean;
-            v.boolean = true;
-            return v;
-        }
-        if (word("False")) {
-            v.kind = PyValue::Kind::boolean;
-            return v;
-        }
-        if (word("None")) return v;
-        fail("unexpected " + quote(text_.substr(pos_, 10)));
-    }
-};
-
 // ---- dtypes --------------------------------------------------------------------------------------------------
-
-float half_to_float(std::uint16_t h) {
-    const std::uint32_t sign = std::uint32_t(h >> 15) << 31;
-    std::uint32_t exponent = (h >> 10) & 31, mantissa = h & 1023;
-    std::uint32_t bits;
-    if (exponent == 31) {
-        bits = sign | 0x7f800000u | (mantissa << 13);  // inf / nan
-    } else if (exponent == 0) {
-        if (mantissa == 0) {
-            bits = sign;
-        } else {  // subnormal: normalise
-            int e = -1;
-            do {
-                ++e;
-                mantissa <<= 1;
-            } while (!(mantissa & 1024));
-            bits = sign | (std::uint32_t(127 - 15 - e) << 23) | ((mantissa & 1023) << 13);
-        }
-    } else {
-        bits = sign | ((exponent + 127 - 15) << 23) | (mantissa << 13);
-    }
-    return bits_to_float(bits);
-}
 
 struct DType {
     enum class Kind { number, half, skip, structured } kind = Kind::skip;
@@ -246,7 +100,7 @@ public:
         std::size_t header_pos = c_.pos();
         const unsigned char* header = c_.take(header_length, "the .npy header");
         std::string_view text(reinterpret_cast<const char*>(header), static_cast<std::size_t>(header_length));
-        PyValue dict = PyLiteralParser(c_, text, header_pos).parse();
+        PyValue dict = parse_python_literal(c_, text, header_pos, "bad .npy header");
         if (dict.kind != PyValue::Kind::dict) c_.fail("bad .npy header at " + c_.where(header_pos) + ": not a dictionary");
 
         const PyValue* descr = dict.get("descr");
@@ -457,159 +311,6 @@ bool take_structured(Array& array, ParticleData& out) {
 }
 
 bool is_positions_shape(const Array& a) { return !a.structured && a.shape.size() == 2 && a.shape[1] == 3; }
-
-// ---- zip -----------------------------------------------------------------------------------------------------
-
-struct ZipMember {
-    std::string name;
-    std::uint16_t flags = 0, method = 0;
-    std::uint32_t crc = 0;
-    std::uint64_t compressed = 0, uncompressed = 0, local_offset = 0;
-};
-
-class ZipReader {
-public:
-    explicit ZipReader(const Source& source) : c_(source) {}
-
-    std::vector<ZipMember> members() {
-        const std::size_t size = c_.size();
-        const unsigned char* d = c_.source().data;
-        if (size < 22) c_.fail("not a zip archive (.npz): " + std::to_string(size) + " bytes are too few for the end record (truncated?)");
-        // The end-of-central-directory record sits in the last 22 + 65535 (comment) bytes.
-        std::size_t eocd = SIZE_MAX;
-        for (std::size_t i = size - 22 + 1; i-- > 0 && size - i <= 22 + 65535;)
-            if (load_le32(d + i) == 0x06054b50u) {
-                eocd = i;
-                break;
-            }
-        if (eocd == SIZE_MAX)
-            c_.fail("no zip end-of-central-directory record in the last " + std::to_string(std::min<std::size_t>(size, 22 + 65535)) +
-                    " bytes: the .npz archive is truncated or not a zip");
-        std::uint64_t entries = load_le16(d + eocd + 10);
-        std::uint64_t cd_size = load_le32(d + eocd + 12);
-        std::uint64_t cd_offset = load_le32(d + eocd + 16);
-        if (load_le16(d + eocd + 4) != 0 || load_le16(d + eocd + 6) != 0)
-            c_.fail("multi-part (split) zip archives are not supported");
-        if (entries == 0xffff || cd_size == 0xffffffffu || cd_offset == 0xffffffffu) {
-            // zip64: a locator just before the end record points at the zip64 end record.
-            if (eocd < 20 || load_le32(d + eocd - 20) != 0x07064b50u) c_.fail("zip64 archive without a zip64 end locator at " + c_.where(eocd));
-            std::uint64_t record = load_le64(d + eocd - 20 + 8);
-            if (record > size || size - record < 56 || load_le32(d + record) != 0x06064b50u)
-                c_.fail("the zip64 end record offset " + std::to_string(record) + " does not point at a zip64 end record");
-            entries = load_le64(d + record + 32);
-            cd_size = load_le64(d + record + 40);
-            cd_offset = load_le64(d + record + 48);
-        }
-        if (cd_offset > size || cd_size > size - cd_offset)
-            c_.fail("the zip central directory (" + std::to_string(cd_size) + " bytes at offset " + std::to_string(cd_offset) +
-                    ") lies outside the " + std::to_string(size) + "-byte file (truncated?)");
-        if (entries > cd_size / 46)
-            c_.fail("the zip central directory claims " + std::to_string(entries) + " members but has room for " +
-                    std::to_string(cd_size / 46));
-        std::vector<ZipMember> out;
-        out.reserve(static_cast<std::size_t>(entries));
-        Cursor cd(c_.source());
-        cd.seek(static_cast<std::size_t>(cd_offset));
-        const std::size_t cd_end = static_cast<std::size_t>(cd_offset + cd_size);
-        for (std::uint64_t e = 0; e < entries; ++e) {
-            std::size_t at = cd.pos();
-            if (cd_end - at < 46 || load_le32(cd.here()) != 0x02014b50u)
-                c_.fail("bad zip central directory entry " + std::to_string(e) + " at " + c_.where(at));
-            const unsigned char* h = cd.take(46, "zip central directory entry");
-            ZipMember m;
-            m.flags = load_le16(h + 8);
-            m.method = load_le16(h + 10);
-            m.crc = load_le32(h + 16);
-            m.compressed = load_le32(h + 20);
-            m.uncompressed = load_le32(h + 24);
-            std::uint16_t name_length = load_le16(h + 28), extra_length = load_le16(h + 30), comment_length = load_le16(h + 32);
-            m.local_offset = load_le32(h + 42);
-            if (std::uint64_t(name_length) + extra_length + comment_length > cd_end - cd.pos())
-                c_.fail("zip central directory entry " + std::to_string(e) + " at " + c_.where(at) + " runs past the directory");
-            const unsigned char* name = cd.take(name_length, "zip member name");
-            m.name.assign(reinterpret_cast<const char*>(name), name_length);
-            const unsigned char* extra = cd.take(extra_length, "zip extra field");
-            cd.take(comment_length, "zip member comment");
-            read_zip64_extra(extra, extra_length, m);
-            out.push_back(std::move(m));
-        }
-        return out;
-    }
-
-    // The member's bytes, inflated if needed; `budget` is what the whole archive may still decompress to.
-    Bytes extract(const ZipMember& m, std::uint64_t& budget) {
-        const std::string what = "zip member " + quote(m.name);
-        if (m.flags & 1) c_.fail(what + " is encrypted; encrypted archives are not supported");
-        if (m.method != 0 && m.method != 8)
-            c_.fail(what + " uses compression method " + std::to_string(m.method) + method_name(m.method) +
-                    "; only stored (0) and deflate (8) are supported (numpy.savez and savez_compressed write these)");
-        const std::size_t size = c_.size();
-        const unsigned char* d = c_.source().data;
-        if (m.local_offset > size || size - m.local_offset < 30 || load_le32(d + m.local_offset) != 0x04034b50u)
-            c_.fail(what + ": no local header at offset " + std::to_string(m.local_offset) + " (truncated or corrupt archive)");
-        std::uint64_t data = m.local_offset + 30 + load_le16(d + m.local_offset + 26) + load_le16(d + m.local_offset + 28);
-        if (data > size || m.compressed > size - data)
-            c_.fail(what + ": its " + std::to_string(m.compressed) + " bytes at offset " + std::to_string(data) +
-                    " run past the end of the " + std::to_string(size) + "-byte file (truncated?)");
-        Bytes out;
-        if (m.method == 0) {
-            if (m.compressed != m.uncompressed)
-                c_.fail(what + " is stored but its sizes differ (" + std::to_string(m.compressed) + " and " +
-                        std::to_string(m.uncompressed) + ")");
-            out.assign(d + data, d + data + m.compressed);
-        } else {
-            if (m.uncompressed > max_inflated_size(m.compressed) || m.uncompressed > budget)
-                c_.fail(what + ": " + std::to_string(m.compressed) + " compressed bytes claim to hold " +
-                        std::to_string(m.uncompressed) + ", beyond any real data; refusing a corrupt file or decompression bomb");
-            budget -= m.uncompressed;
-            out.resize(static_cast<std::size_t>(m.uncompressed));
-            inflate_exact(c_.source().path, d + data, static_cast<std::size_t>(m.compressed), out.data(), out.size(), -15, what);
-        }
-        std::uint32_t crc = 0;
-        for (std::size_t off = 0; off < out.size(); off += 1u << 30)
-            crc = static_cast<std::uint32_t>(crc32(crc, out.data() + off, static_cast<uInt>(std::min<std::size_t>(out.size() - off, 1u << 30))));
-        if (crc != m.crc) c_.fail(what + ": CRC-32 mismatch, the archive is corrupt");
-        return out;
-    }
-
-private:
-    Cursor c_;
-
-    static std::string method_name(std::uint16_t method) {
-        switch (method) {
-            case 12: return " (bzip2)";
-            case 14: return " (LZMA)";
-            case 93: return " (Zstandard)";
-            case 95: return " (XZ)";
-            case 9: return " (deflate64)";
-            default: return "";
-        }
-    }
-
-    // Zip64 extended information (id 1): the 64-bit values of those fixed fields that hold 0xffffffff, in order.
-    void read_zip64_extra(const unsigned char* extra, std::size_t length, ZipMember& m) const {
-        std::size_t i = 0;
-        while (i + 4 <= length) {
-            std::uint16_t id = load_le16(extra + i), n = load_le16(extra + i + 2);
-            if (n > length - i - 4) break;
-            if (id == 1) {
-                const unsigned char* p = extra + i + 4;
-                std::size_t left = n;
-                auto next = [&](std::uint64_t& field) {
-                    if (field != 0xffffffffu) return;
-                    if (left < 8) c_.fail("zip member " + quote(m.name) + ": truncated zip64 extra field");
-                    field = load_le64(p);
-                    p += 8;
-                    left -= 8;
-                };
-                next(m.uncompressed);
-                next(m.compressed);
-                next(m.local_offset);
-            }
-            i += 4 + n;
-        }
-    }
-};
 
 }  // namespace
 
