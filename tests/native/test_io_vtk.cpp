@@ -258,3 +258,124 @@ TEST_CASE("VTK mesh output parses", "[io]") {
         for (int k = 0; k < 3; ++k) REQUIRE(word(k + 1) == mesh.triangles[3 * t + k]);
     }
 }
+
+// ---------------------------------------------------------------------------------------------------------------
+// Meshes read back (read_mesh)
+
+TEST_CASE("VTK meshes round-trip through write_mesh and read_mesh", "[io]") {
+    TempDir dir("vtkmesh");
+    const std::string path = dir.file("mesh.vtk");
+    TriMesh mesh = make_test_mesh();  // attributes of 1 (SCALARS), 3 (VECTORS) and 2 (FIELD) components
+    write_mesh(mesh, path);
+    TriMesh back = read_mesh(path);
+    require_same_mesh(mesh, back, true);
+    for (const auto& a : back.attributes) CHECK(!a.integral);  // written as float
+
+    // Without normals, without attributes, and empty.
+    TriMesh bare = mesh;
+    bare.normals.clear();
+    write_mesh(bare, path);
+    require_same_mesh(bare, read_mesh(path), true);
+    bare.attributes.clear();
+    write_mesh(bare, path);
+    require_same_mesh(bare, read_mesh(path), true);
+    write_mesh(TriMesh{}, path);
+    TriMesh empty = read_mesh(path);
+    REQUIRE(empty.vertices.empty());
+    REQUIRE(empty.triangles.empty());
+
+    // Names are made header-safe on writing; gzip and a name without the extension are recognised by content.
+    TriMesh spaced = mesh;
+    spaced.attributes[0].name = "rest density";
+    write_mesh(spaced, path);
+    REQUIRE(read_mesh(path).attributes[0].name == "rest_density");
+    const std::string gz = dir.file("mesh.vtk.gz"), plain = dir.file("mesh.dat");
+    write_bytes(gz, gzip(read_bytes(path)));
+    write_bytes(plain, read_bytes(path));
+    CHECK(read_mesh(gz).triangles == mesh.triangles);
+    CHECK(read_mesh(plain).vertices == mesh.vertices);
+}
+
+TEST_CASE("ASCII VTK meshes, 4.x and 5.x polygons, fanned into triangles", "[io]") {
+    TempDir dir("vtkmesh_ascii");
+    const std::string path = dir.file("quad.vtk");
+    const std::string points = "POINTS 5 float\n0 0 0  1 0 0  1 1 0  0 1 0  0 0 1\n";
+    const std::string point_data = "POINT_DATA 5\nNORMALS n float\n0 0 1 0 0 1 0 0 1 0 0 1 1 0 0\n"
+                                   "SCALARS id int 1\nLOOKUP_TABLE default\n7 8 9 10 11\n"
+                                   "FIELD FieldData 1\nuv 2 5 float\n0 0 1 0 1 1 0 1 0.5 0.5\n";
+    for (const std::string polygons : {std::string("POLYGONS 2 9\n4 0 1 2 3\n3 0 1 4\n"),
+                                       std::string("POLYGONS 3 7\nOFFSETS vtktypeint64\n0 4 7\nCONNECTIVITY vtktypeint64\n0 1 2 3 0 1 4\n")}) {
+        INFO(polygons);
+        write_text(path, "# vtk DataFile Version 5.1\nquad and triangle\nASCII\nDATASET POLYDATA\n" + points +
+                             "VERTICES 2 1\nOFFSETS vtktypeint64\n0 1\nCONNECTIVITY vtktypeint64\n4\n" + polygons + point_data);
+        TriMesh m = read_mesh(path);
+        REQUIRE(m.num_vertices() == 5);
+        REQUIRE(m.triangles == std::vector<int32_t>{0, 1, 2, 0, 2, 3, 0, 1, 4});
+        REQUIRE(m.normals.size() == 15);
+        CHECK(m.normals[12] == 1.0f);
+        REQUIRE(m.attributes.size() == 2);
+        CHECK(m.attributes[0].name == "id");
+        CHECK(m.attributes[0].integral);
+        CHECK(m.attributes[0].values == std::vector<float>{7, 8, 9, 10, 11});
+        CHECK(m.attributes[1].name == "uv");
+        CHECK(m.attributes[1].components == 2);
+        CHECK(m.attributes[1].values[8] == 0.5f);
+    }
+}
+
+TEST_CASE("damaged and unsupported VTK meshes give FormatError naming the file and the problem", "[io]") {
+    TempDir dir("vtkmesh_bad");
+    const std::string path = dir.file("bad.vtk");
+    const std::string head = "# vtk DataFile Version 4.2\nbad\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 0 1 0\n";
+    struct Case {
+        std::string text, expect;
+    };
+    const Case cases[] = {
+        {head + "POLYGONS 1 4\n3 0 1 3\n", "POLYGONS cell 0 refers to vertex 3 but there are only 3 points"},
+        {head + "POLYGONS 1 4\n3 0 1 -1\n", "refers to vertex -1"},
+        {head + "POLYGONS 1 3\n2 0 1\n", "POLYGONS cell 0 has only 2 vertices"},
+        {head + "POLYGONS 1 4\n5 0 1 2\n", "POLYGONS cell 0 runs past the 4 values"},
+        {head + "POLYGONS 1 5\n3 0 1 2 7\n", "POLYGONS has 1 cells in 4 values, but its size says 5"},
+        {head + "POLYGONS 1 4\n3 0 1 2.5\n", "bad value '2.5' in POLYGONS data"},
+        {head + "POLYGONS 1 4\n3 0 1 2\nPOLYGONS 1 4\n3 0 1 2\n", "second POLYGONS section"},
+        {head + "TRIANGLE_STRIPS 1 4\n3 0 1 2\n", "TRIANGLE_STRIPS"},
+        {head + "POLYGONS 2 3\nOFFSETS float\n0 3\nCONNECTIVITY vtktypeint64\n0 1 2\n", "cell indices must be integers"},
+        {head + "POLYGONS 2 3\nOFFSETS vtktypeint64\n0 4\nCONNECTIVITY vtktypeint64\n0 1 2\n", "POLYGONS OFFSETS value 1 (4)"},
+        {head + "POLYGONS 2 3\nOFFSETS vtktypeint64\n1 3\nCONNECTIVITY vtktypeint64\n0 1 2\n", "POLYGONS OFFSETS value 0 (1)"},
+        {head + "POLYGONS 2 3\nOFFSETS vtktypeint64\n0 2\nCONNECTIVITY vtktypeint64\n0 1 2\n", "OFFSETS end at 2 but CONNECTIVITY has 3"},
+        {"# vtk DataFile Version 4.2\nbad\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 3 float\n0 0 0 1 0 0 0 1 0\n"
+         "CELLS 1 4\n3 0 1 2\nCELL_TYPES 1\n5\n", "must be DATASET POLYDATA"},
+        {"# vtk DataFile Version 4.2\nbad\nASCII\nDATASET POLYDATA\n", "no POINTS section"},
+        {head, "no POLYGONS section"},
+    };
+    for (const auto& c : cases) {
+        INFO(c.text);
+        write_text(path, c.text);
+        require_mesh_error(path, c.expect);
+    }
+    // Every cut of a binary mesh: a FormatError naming the file, or (at a section boundary after the polygons) the
+    // whole geometry with the point data before the cut; cuts up to the end of the polygons always fail.
+    TriMesh mesh = make_test_mesh();
+    write_mesh(mesh, path);
+    const Bytes bytes = read_bytes(path);
+    const std::string text = as_text(bytes);
+    const std::size_t polygons_end = text.find("\nPOINT_DATA");
+    REQUIRE(polygons_end != std::string::npos);
+    const std::string cut = dir.file("cut.vtk");
+    for (std::size_t length = 1; length < bytes.size(); ++length) {
+        write_bytes(cut, bytes, length);
+        const std::string message = format_error_of([&] {
+            TriMesh m = read_mesh(cut);
+            REQUIRE(m.vertices == mesh.vertices);
+            REQUIRE(m.triangles == mesh.triangles);
+            for (const auto& a : m.attributes) REQUIRE(a.values.size() == m.num_vertices() * static_cast<std::size_t>(a.components));
+        });
+        INFO("cut at " << length << ": " << message);
+        if (length < polygons_end) REQUIRE(!message.empty());
+        if (!message.empty()) REQUIRE(starts_with(message, cut));
+    }
+    // Unknown formats name what is supported.
+    const std::string stl = dir.file("mesh.stl");
+    write_text(stl, "solid x\n");
+    require_mesh_error(stl, "(supported: .ply, .obj, .vtk)");
+}

@@ -185,12 +185,16 @@ TriMesh read_mesh_from_bytes(const std::string& path, Bytes bytes) {
         decompressed = true;
     }
     Source source{path, bytes.data(), bytes.size(), decompressed};
-    std::string ext = lower_extension(path);
-    bool ply_magic = bytes.size() >= 4 && std::memcmp(bytes.data(), "ply", 3) == 0 && (bytes[3] == '\n' || bytes[3] == '\r');
-    if (ply_magic || ext == ".ply") return read_ply_mesh(source);
+    const std::string ext = lower_extension(path);
+    const bool ply_magic = bytes.size() >= 4 && std::memcmp(bytes.data(), "ply", 3) == 0 && (bytes[3] == '\n' || bytes[3] == '\r');
+    if (ply_magic) return read_ply_mesh(source);
+    if (starts_with(bytes, "# vtk DataFile")) return read_vtk_mesh(source);
+    if (ext == ".ply") return read_ply_mesh(source);
     if (ext == ".obj") return read_obj_mesh(source);
-    fail(path, "unknown mesh format: not PLY (no 'ply' header) and the extension " +
-                   (ext.empty() ? std::string("is missing") : "'" + ext + "' is not .obj") + " (supported: .ply, .obj)");
+    if (ext == ".vtk") return read_vtk_mesh(source);
+    fail(path, "unknown mesh format: not PLY (no 'ply' header) or legacy VTK (no '# vtk DataFile' header) and the "
+               "extension " + (ext.empty() ? std::string("is missing") : "'" + ext + "' is none of them") +
+               " (supported: .ply, .obj, .vtk)");
 }
 
 }  // namespace io_detail

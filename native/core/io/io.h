@@ -27,7 +27,9 @@ ParticleData read_particles(const std::string& path);
 // in formats/ply.cpp). An invalid mesh or an unknown extension is an InputError; a failed write a FormatError.
 void write_mesh(const TriMesh& mesh, const std::string& path);
 
-// Reads a triangle mesh written by write_mesh (PLY binary/ASCII or OBJ), with normals and attributes where present.
+// Reads a triangle mesh such as write_mesh writes (PLY binary/ASCII, OBJ, legacy VTK POLYDATA binary/ASCII; chosen by
+// the 'ply' or '# vtk DataFile' header, else by the extension), with normals and attributes where present; polygons
+// are fanned into triangles.
 TriMesh read_mesh(const std::string& path);
 
 }  // namespace meniscus

@@ -64,9 +64,10 @@ ParticleData read_csv_particles(const Source& source);    // delimited text with
 ParticleData read_xyz_particles(const Source& source);    // raw little-endian float32 triples, or x y z text lines
 ParticleData read_houdini_json_particles(const Source& source);  // Houdini 12+ JSON geometry: ASCII .geo, binary .bgeo
 
-// The mesh readers (formats/ply.cpp, obj.cpp), the same way.
+// The mesh readers (formats/ply.cpp, obj.cpp, vtk.cpp), the same way.
 TriMesh read_ply_mesh(const Source& source);
 TriMesh read_obj_mesh(const Source& source);
+TriMesh read_vtk_mesh(const Source& source);  // legacy VTK POLYDATA with POLYGONS
 
 // Format detection and dispatch on bytes already in memory (gzip is undone first); `path` names the file in
 // messages and its extension decides where the content has no magic. read_particles(path) is read_file + this; the

@@ -1,4 +1,6 @@
-// Legacy VTK particles (the points and their POINT_DATA of any legacy file, parsed by vtk_legacy.cpp), and meshes written as binary POLYDATA: POINTS, POLYGONS triangles, and
+// Legacy VTK particles (the points and their POINT_DATA of any legacy file) and meshes (POLYDATA: the points, their
+// POLYGONS fanned into triangles, the first 3-component NORMALS as the normals and every other POINT_DATA array as an
+// attribute), both parsed by vtk_legacy.cpp; and meshes written as binary POLYDATA: POINTS, POLYGONS triangles, and
 // POINT_DATA with the normals as NORMALS, 1- and 3-component attributes as SCALARS / VECTORS and other component
 // counts in a FIELD block (so every attribute reads back as float; whole-number ones are not marked as such).
 #include "io/formats/vtk_legacy.h"
@@ -8,11 +10,52 @@ namespace meniscus {
 namespace io_detail {
 
 ParticleData read_vtk_particles(const Source& source) {
-    vtk_legacy::Dataset dataset = vtk_legacy::read(source);
+    vtk_legacy::Dataset dataset = vtk_legacy::read(source, vtk_legacy::Options{});
     ParticleData out;
     out.positions = std::move(dataset.positions);
     for (auto& array : dataset.point_data) out.attributes.push_back(std::move(array.attribute));
     return out;
+}
+
+namespace {
+
+// Polygon i's vertices as triangles (a fan around its first vertex), each index checked against the points.
+void add_polygon(const Cursor& c, const vtk_legacy::Polygons& polygons, std::size_t i, std::size_t points, std::vector<std::int32_t>& out) {
+    const std::uint64_t begin = polygons.offsets[i], end = polygons.offsets[i + 1];
+    if (end - begin < 3)
+        c.fail("POLYGONS cell " + std::to_string(i) + " has only " + std::to_string(end - begin) + " vertices (a face needs 3)");
+    for (std::uint64_t k = begin; k < end; ++k) {
+        const std::int64_t v = polygons.connectivity[static_cast<std::size_t>(k)];
+        if (v < 0 || static_cast<std::uint64_t>(v) >= points || v > INT32_MAX)
+            c.fail("POLYGONS cell " + std::to_string(i) + " refers to vertex " + std::to_string(v) + " but there are only " +
+                   std::to_string(points) + " points");
+    }
+    for (std::uint64_t k = begin + 1; k + 1 < end; ++k)
+        for (std::uint64_t corner : {begin, k, k + 1}) out.push_back(static_cast<std::int32_t>(polygons.connectivity[static_cast<std::size_t>(corner)]));
+}
+
+}  // namespace
+
+TriMesh read_vtk_mesh(const Source& source) {
+    vtk_legacy::Options options;
+    options.polygons = true;
+    vtk_legacy::Dataset dataset = vtk_legacy::read(source, options);
+    const Cursor c(source);
+    if (dataset.unstructured_grid)
+        c.fail("a legacy VTK mesh must be DATASET POLYDATA with POLYGONS; the cells of an UNSTRUCTURED_GRID are not read as faces");
+    // write_mesh always writes POLYGONS (POLYGONS 0 0 for no faces): without it the file was cut short.
+    if (!dataset.have_polygons) c.fail("no POLYGONS section: a legacy VTK mesh lists its faces as POLYGONS (file truncated?)");
+    TriMesh mesh;
+    mesh.vertices = std::move(dataset.positions);
+    const vtk_legacy::Polygons& polygons = dataset.polygons;
+    for (std::size_t i = 0; i < polygons.count(); ++i) add_polygon(c, polygons, i, mesh.num_vertices(), mesh.triangles);
+    for (auto& array : dataset.point_data) {
+        if (array.section == "NORMALS" && array.attribute.components == 3 && mesh.normals.empty())
+            mesh.normals = std::move(array.attribute.values);
+        else
+            mesh.attributes.push_back(std::move(array.attribute));
+    }
+    return mesh;
 }
 
 void write_vtk_mesh(const TriMesh& mesh, const std::string& path) {

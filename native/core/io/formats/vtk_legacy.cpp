@@ -6,6 +6,7 @@
 // the 5.x one (OFFSETS and CONNECTIVITY arrays with their own types).
 #include "io/formats/vtk_legacy.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace meniscus {
@@ -59,6 +60,14 @@ std::string upper(std::string_view s) {
     return out;
 }
 
+// An integer of an integer type, big-endian; unsigned 64-bit values beyond the signed range saturate (no index is
+// that large, and the caller range-checks indices).
+std::int64_t decode_integer(const unsigned char* p, ScalarType t) {
+    if (t == ScalarType::u64) return static_cast<std::int64_t>(std::min<std::uint64_t>(load_be64(p), INT64_MAX));
+    if (t == ScalarType::i64) return static_cast<std::int64_t>(load_be64(p));
+    return static_cast<std::int64_t>(decode_scalar(p, t, true));  // exact for every type of 32 bits or fewer
+}
+
 // Keyword lines have at most 5 tokens ("TEXTURE_COORDINATES name dim type"); a few more are tolerated and ignored.
 constexpr std::size_t kMaxKeywordTokens = 16;
 
@@ -92,6 +101,26 @@ public:
         return values;
     }
 
+    // `count` values of an integer `type` (cell connectivity), exactly.
+    std::vector<std::int64_t> integers(ScalarType type, std::uint64_t count, const std::string& what) {
+        if (!scalar_is_integer(type)) c_.fail(what + " has a floating-point type; cell indices must be integers");
+        std::vector<std::int64_t> values;
+        if (binary_) {
+            const unsigned char* p = binary_block(type, count, what);
+            values.resize(static_cast<std::size_t>(count));
+            for (std::size_t i = 0; i < values.size(); ++i) values[i] = decode_integer(p + i * scalar_size(type), type);
+            return values;
+        }
+        check_ascii_count(count, what);
+        values.resize(static_cast<std::size_t>(count));
+        for (std::uint64_t i = 0; i < count; ++i) {
+            std::string_view token = ascii_token(i, count, what);
+            if (!parse_i64(token, values[static_cast<std::size_t>(i)]))
+                c_.fail("bad value " + quote(token) + " in " + what + " at " + c_.where(c_.pos() - token.size()) + " (expected an integer)");
+        }
+        return values;
+    }
+
 private:
     Cursor& c_;
     bool binary_ = false;
@@ -119,7 +148,7 @@ private:
 
 class Reader {
 public:
-    explicit Reader(const Source& source) : c_(source), arrays_(c_) {}
+    Reader(const Source& source, const Options& options) : c_(source), options_(options), arrays_(c_) {}
 
     Dataset read() {
         read_header();
@@ -139,6 +168,7 @@ public:
 
 private:
     Cursor c_;
+    Options options_;
     ArrayReader arrays_;
     bool binary_ = false;
     bool have_points_ = false;
@@ -270,6 +300,7 @@ private:
         if (!iequals(tokens[1], "UNSTRUCTURED_GRID") && !iequals(tokens[1], "POLYDATA"))
             c_.fail("unsupported DATASET " + quote(tokens[1]) + " (supported: UNSTRUCTURED_GRID, POLYDATA)");
         unstructured_ = iequals(tokens[1], "UNSTRUCTURED_GRID");
+        result_.unstructured_grid = unstructured_;
     }
 
     void read_points(const Tokens& tokens, std::size_t line_pos) {
@@ -286,27 +317,83 @@ private:
     // CELLS, VERTICES, LINES, POLYGONS or TRIANGLE_STRIPS: "KEYWORD n size", then the cells in the 4.x or 5.x layout.
     void read_cells(const Tokens& tokens, std::size_t line_pos) {
         const std::string keyword = upper(tokens[0]);
+        const bool keep = options_.polygons && keyword == "POLYGONS";
+        if (options_.polygons && keyword == "TRIANGLE_STRIPS")
+            c_.fail("TRIANGLE_STRIPS at " + c_.where(line_pos) + " are not read as mesh faces; write the mesh with POLYGONS");
+        if (keep && result_.have_polygons) c_.fail("second POLYGONS section at " + c_.where(line_pos));
         std::uint64_t n = parse_count(tokens, 1, keyword + " count", line_pos);
         std::uint64_t size = parse_count(tokens, 2, keyword + " size", line_pos);
         if (peek_keyword("OFFSETS"))
-            skip_cells_5x(keyword, n, size);
+            read_cells_5x(keyword, n, size, keep);
+        else if (keep)
+            result_.polygons = polygons_4x(arrays_.integers(ScalarType::i32, size, keyword + " data"), n, size);
         else
             arrays_.floats(ScalarType::i32, size, keyword + " data", false);
+        result_.have_polygons = result_.have_polygons || keep;
         have_cells_ = have_cells_ || keyword == "CELLS";
         skip_optional_metadata();
     }
 
     // VTK 5: "KEYWORD n_offsets n_connectivity", then OFFSETS and CONNECTIVITY arrays with their own types.
-    void skip_cells_5x(const std::string& keyword, std::uint64_t n, std::uint64_t size) {
+    void read_cells_5x(const std::string& keyword, std::uint64_t n, std::uint64_t size, bool keep) {
         std::size_t pos = c_.pos();
         auto offsets_line = split_tokens(c_.line(), kMaxKeywordTokens);
-        arrays_.floats(parse_type(offsets_line, 1, keyword + " OFFSETS", pos), n, keyword + " OFFSETS data", false);
+        const ScalarType offsets_type = parse_type(offsets_line, 1, keyword + " OFFSETS", pos);
+        std::vector<std::int64_t> offsets;
+        if (keep)
+            offsets = arrays_.integers(offsets_type, n, keyword + " OFFSETS data");
+        else
+            arrays_.floats(offsets_type, n, keyword + " OFFSETS data", false);
         skip_optional_metadata();
         auto conn = next_line(pos);
         if (conn.empty() || !iequals(conn[0], "CONNECTIVITY"))
             c_.fail("expected CONNECTIVITY at " + c_.where(pos) + " after the " + keyword + " OFFSETS data" +
                     (conn.empty() ? " (file truncated)" : ", found " + quote(conn[0])));
-        arrays_.floats(parse_type(conn, 1, keyword + " CONNECTIVITY", pos), size, keyword + " CONNECTIVITY data", false);
+        const ScalarType conn_type = parse_type(conn, 1, keyword + " CONNECTIVITY", pos);
+        if (!keep) {
+            arrays_.floats(conn_type, size, keyword + " CONNECTIVITY data", false);
+            return;
+        }
+        std::vector<std::int64_t> connectivity = arrays_.integers(conn_type, size, keyword + " CONNECTIVITY data");
+        result_.polygons = polygons_5x(offsets, std::move(connectivity));
+    }
+
+    // The 4.x records [count, index...] of `n` polygons that fill exactly `size` values.
+    Polygons polygons_4x(const std::vector<std::int64_t>& records, std::uint64_t n, std::uint64_t size) {
+        Polygons out;
+        std::uint64_t at = 0;
+        for (std::uint64_t cell = 0; cell < n; ++cell) {
+            const std::int64_t count = at < size ? records[static_cast<std::size_t>(at)] : -1;
+            if (count < 0 || static_cast<std::uint64_t>(count) >= size - at)
+                c_.fail("POLYGONS cell " + std::to_string(cell) + " runs past the " + std::to_string(size) +
+                        " values the POLYGONS line announces (a wrong count or size)");
+            out.connectivity.insert(out.connectivity.end(), records.begin() + static_cast<std::ptrdiff_t>(at + 1),
+                                    records.begin() + static_cast<std::ptrdiff_t>(at + 1 + count));
+            out.offsets.push_back(out.connectivity.size());
+            at += 1 + static_cast<std::uint64_t>(count);
+        }
+        if (at != size)
+            c_.fail("POLYGONS has " + std::to_string(n) + " cells in " + std::to_string(at) + " values, but its size says " +
+                    std::to_string(size));
+        return out;
+    }
+
+    // VTK 5 offsets must start at 0, never decrease, and end at the connectivity's size.
+    Polygons polygons_5x(const std::vector<std::int64_t>& offsets, std::vector<std::int64_t>&& connectivity) {
+        Polygons out;
+        out.offsets.clear();
+        for (std::size_t i = 0; i < offsets.size(); ++i) {
+            const std::int64_t o = offsets[i];
+            const bool ok = i == 0 ? o == 0 : o >= offsets[i - 1] && static_cast<std::uint64_t>(o) <= connectivity.size();
+            if (!ok) c_.fail("POLYGONS OFFSETS value " + std::to_string(i) + " (" + std::to_string(o) + ") is not a valid offset");
+            out.offsets.push_back(static_cast<std::uint64_t>(o));
+        }
+        if (out.offsets.empty()) out.offsets.push_back(0);
+        if (out.offsets.back() != connectivity.size())
+            c_.fail("POLYGONS OFFSETS end at " + std::to_string(out.offsets.back()) + " but CONNECTIVITY has " +
+                    std::to_string(connectivity.size()) + " values");
+        out.connectivity = std::move(connectivity);
+        return out;
     }
 
     void read_cell_types(const Tokens& tokens, std::size_t line_pos) {
@@ -445,7 +532,7 @@ private:
 
 }  // namespace
 
-Dataset read(const Source& source) { return Reader(source).read(); }
+Dataset read(const Source& source, const Options& options) { return Reader(source, options).read(); }
 
 }  // namespace vtk_legacy
 }  // namespace io_detail
