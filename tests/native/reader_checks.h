@@ -253,5 +253,21 @@ inline void require_same_mesh(const TriMesh& a, const TriMesh& b, bool with_attr
     }
 }
 
+// write_mesh then read_mesh gives the mesh back; returns what was read.
+inline TriMesh require_round_trip(const TriMesh& mesh, const std::string& path, bool with_attributes = true) {
+    write_mesh(mesh, path);
+    TriMesh back = read_mesh(path);
+    require_same_mesh(mesh, back, with_attributes);
+    return back;
+}
+
+// An empty mesh writes and reads back empty.
+inline void require_empty_round_trip(const std::string& path) {
+    write_mesh(TriMesh{}, path);
+    TriMesh empty = read_mesh(path);
+    REQUIRE(empty.vertices.empty());
+    REQUIRE(empty.triangles.empty());
+}
+
 }  // namespace test
 }  // namespace meniscus

@@ -36,9 +36,7 @@ TEST_CASE("PLY round trip keeps vertices, triangles, normals and attributes", "[
     TempDir dir("ply");
     TriMesh mesh = make_test_mesh();
     std::string path = dir.file("mesh.ply");
-    write_mesh(mesh, path);
-    TriMesh back = read_mesh(path);
-    require_same_mesh(mesh, back, true);
+    require_round_trip(mesh, path);
 
     std::string header(reinterpret_cast<const char*>(read_bytes(path).data()), 400);
     CHECK_THAT(header, Catch::Contains("format binary_little_endian 1.0"));
@@ -50,27 +48,19 @@ TEST_CASE("PLY round trip keeps vertices, triangles, normals and attributes", "[
     TriMesh bare = mesh;
     bare.normals.clear();
     bare.attributes.clear();
-    write_mesh(bare, path);
-    require_same_mesh(bare, read_mesh(path), true);
-    write_mesh(TriMesh{}, path);
-    TriMesh empty = read_mesh(path);
-    REQUIRE(empty.vertices.empty());
-    REQUIRE(empty.triangles.empty());
+    require_round_trip(bare, path);
+    require_empty_round_trip(path);
 }
 
 TEST_CASE("OBJ round trip keeps vertices, triangles and normals", "[io]") {
     TempDir dir("obj");
     TriMesh mesh = make_test_mesh();
     std::string path = dir.file("mesh.obj");
-    write_mesh(mesh, path);
-    TriMesh back = read_mesh(path);
-    require_same_mesh(mesh, back, false);
-    REQUIRE(back.attributes.empty());
+    REQUIRE(require_round_trip(mesh, path, false).attributes.empty());
 
     TriMesh bare = mesh;
     bare.normals.clear();
-    write_mesh(bare, path);
-    require_same_mesh(bare, read_mesh(path), false);
+    require_round_trip(bare, path, false);
 }
 
 TEST_CASE("PLY in ASCII and big-endian binary, with polygons and extra elements", "[io]") {
