@@ -157,3 +157,26 @@ TEST_CASE("NumPy .npz: zip methods, CRC and member choice", "[formats]") {
     CHECK(p.attributes[0].name == "velocity");
     CHECK(p.attributes[0].values == std::vector<float>{7, 8, 9});
 }
+
+TEST_CASE("NumPy: zero-length subarray fields are skipped", "[formats]") {
+    // A fuzzer finding: ('velocity', '>f4', (0,)) made an attribute of 0 components. Such a field holds no values.
+    TempDir dir("npy_zero");
+    std::string path = dir.file("a.npy");
+    const Bytes record = floats_le({1, 2, 3, 4});
+    const std::string header = "{'descr': [('x', '<f4'), ('y', '<f4'), ('z', '<f4'), ('velocity', '>f4', (0,)), ('mass', '<f4')], "
+                               "'fortran_order': False, 'shape': (1,)}";
+    write_bytes(path, npy(header, record));
+    ParticleData p = read_particles(path);
+    REQUIRE(p.positions == std::vector<float>{1, 2, 3});
+    REQUIRE(p.attributes.size() == 1);
+    CHECK(p.attributes[0].name == "mass");
+    CHECK(p.attributes[0].values == std::vector<float>{4});
+    // The same record as a structured .npz member next to separate positions.
+    path = dir.file("a.npz");
+    write_bytes(path, zip_stored({{"positions.npy", npy("{'descr': '<f4', 'fortran_order': False, 'shape': (1, 3), }", floats_le({1, 2, 3}))},
+                                  {"extra.npy", npy(header, record)}}));
+    p = read_particles(path);
+    REQUIRE(p.attributes.size() == 4);
+    for (const auto& a : p.attributes) CHECK(a.components == 1);
+    CHECK(p.attributes[3].name == "extra.mass");
+}

@@ -136,6 +136,11 @@ public:
             const std::size_t n = static_cast<std::size_t>(array.shape[0]);
             for (const auto& f : dtype.fields) {
                 if (!f.type->numeric()) continue;  // strings, nested records, padding: no float meaning
+                // A zero-length subarray field ('velocity', '<f4', (0,)) holds no values. Skipped rather than refused:
+                // numpy writes such dtypes for valid arrays, the other fields are intact and nothing is lost (an .npz
+                // member of zero components is left out the same way); kept, it would be an attribute of 0
+                // components, which no consumer can index. Readers have no warning channel, so the skip is silent.
+                if (f.count == 0) continue;
                 Column col;
                 col.name = f.name;
                 col.integral = f.type->kind == DType::Kind::number && scalar_is_integer(f.type->type);
