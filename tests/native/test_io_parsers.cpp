@@ -8,7 +8,6 @@
 #include <string>
 #include <vector>
 
-#include "base/errors.h"
 #include "io/io_util.h"
 #include "io/parsers/base64.h"
 #include "io/parsers/half_float.h"
@@ -16,6 +15,7 @@
 #include "io/parsers/python_literal.h"
 #include "io/parsers/xml.h"
 #include "io/parsers/zip.h"
+#include "reader_checks.h"
 
 using namespace meniscus;
 using namespace meniscus::io_detail;
@@ -29,16 +29,6 @@ struct TextSource {
     explicit TextSource(std::string t, const std::string& path = "mem.bin")
         : text(std::move(t)), source{path, reinterpret_cast<const unsigned char*>(text.data()), text.size(), false} {}
 };
-
-template <class F>
-std::string error_of(F&& f) {
-    try {
-        f();
-    } catch (const FormatError& e) {
-        return e.what();
-    }
-    return "";
-}
 
 std::string decode_base64(const std::string& text, std::size_t n) {
     TextSource s(text);
@@ -102,19 +92,7 @@ void put_le32(Bytes& b, std::uint32_t v) {
 
 // A zip of one member, stored (method 0) or deflated (method 8), with the given flags.
 Bytes one_member_zip(const std::string& name, const Bytes& data, int method, unsigned flags = 0) {
-    Bytes payload = data;
-    if (method == 8) {
-        z_stream zs{};
-        REQUIRE(deflateInit2(&zs, 9, Z_DEFLATED, -15, 8, Z_DEFAULT_STRATEGY) == Z_OK);
-        payload.assign(deflateBound(&zs, static_cast<uLong>(data.size())) + 16, 0);
-        zs.next_in = const_cast<Bytef*>(data.data());
-        zs.avail_in = static_cast<uInt>(data.size());
-        zs.next_out = payload.data();
-        zs.avail_out = static_cast<uInt>(payload.size());
-        REQUIRE(deflate(&zs, Z_FINISH) == Z_STREAM_END);
-        payload.resize(zs.total_out);
-        deflateEnd(&zs);
-    }
+    const Bytes payload = method == 8 ? test::deflate_bytes(data, -15) : data;
     const std::uint32_t crc = static_cast<std::uint32_t>(crc32(0, data.data(), static_cast<uInt>(data.size())));
     Bytes out;
     auto header = [&](bool central) {
@@ -189,11 +167,11 @@ TEST_CASE("base64 decodes across white space, ranges and mid-string padding", "[
     split.read(out, 3);
     CHECK(std::string(reinterpret_cast<char*>(out), 3) == "Man");
 
-    CHECK_THAT(error_of([] { decode_base64("TW*u", 3); }), Catch::StartsWith("mem.bin: invalid base64 character '*' at byte 2 in the test data"));
-    CHECK_THAT(error_of([] { decode_base64("TWFu", 4); }), Catch::Contains("truncated base64 data in the test data: it ends after 3 bytes"));
-    CHECK_THAT(error_of([] { decode_base64("TWFuT", 4); }), Catch::Contains("a lone character at byte 4"));
-    CHECK_THAT(error_of([] { decode_base64("=TWF", 1); }), Catch::Contains("bad base64 padding at byte 0"));
-    CHECK_THAT(error_of([] { decode_base64("TQ=x", 1); }), Catch::Contains("bad base64 padding at byte 3"));
+    CHECK_THAT(test::format_error_of([] { decode_base64("TW*u", 3); }), Catch::StartsWith("mem.bin: invalid base64 character '*' at byte 2 in the test data"));
+    CHECK_THAT(test::format_error_of([] { decode_base64("TWFu", 4); }), Catch::Contains("truncated base64 data in the test data: it ends after 3 bytes"));
+    CHECK_THAT(test::format_error_of([] { decode_base64("TWFuT", 4); }), Catch::Contains("a lone character at byte 4"));
+    CHECK_THAT(test::format_error_of([] { decode_base64("=TWF", 1); }), Catch::Contains("bad base64 padding at byte 0"));
+    CHECK_THAT(test::format_error_of([] { decode_base64("TQ=x", 1); }), Catch::Contains("bad base64 padding at byte 3"));
 }
 
 TEST_CASE("the XML scanner reports tags, text and nesting", "[io][parsers]") {
@@ -206,7 +184,7 @@ TEST_CASE("the XML scanner reports tags, text and nesting", "[io][parsers]") {
     // The visitor can end the scan: what follows is not markup.
     CHECK(scan("<a><data/>\x01\x02<<<", "data") == std::vector<std::string>{"start a depth 0", "start data depth 1 empty"});
 
-    auto error = [](const std::string& xml) { return error_of([&] { scan(xml); }); };
+    auto error = [](const std::string& xml) { return test::format_error_of([&] { scan(xml); }); };
     CHECK_THAT(error("<a></b>"), Catch::Contains("closing tag </b> does not match <a> at byte 3"));
     CHECK_THAT(error("<a><b>"), Catch::Contains("truncated at byte 6: the XML element <b> is not closed"));
     CHECK_THAT(error("<a><!-- x"), Catch::Contains("the XML comment started at byte 3 is not closed"));
@@ -255,7 +233,7 @@ TEST_CASE("ASCII JSON: values, packing, selections and errors", "[io][parsers]")
     CHECK(json_lookup(*nested, "a")->text.empty());
     CHECK(json_lookup(*nested, "b")->text == "y");
 
-    auto error = [](const std::string& text) { return error_of([&] { text_json(text); }); };
+    auto error = [](const std::string& text) { return test::format_error_of([&] { text_json(text); }); };
     CHECK_THAT(error("[1, 2] x"), Catch::Contains("unexpected 'x' after the JSON value at byte 7"));
     CHECK_THAT(error("[1, 2"), Catch::Contains("bad JSON at byte 5: expected ','"));
     CHECK_THAT(error("[1-2]"), Catch::Contains("bad number '1-2'"));
@@ -316,7 +294,7 @@ TEST_CASE("binary JSON: tokens, uniform arrays and both byte orders give the ASC
     }
     auto error = [](Bytes b) {
         Source source{"mem.bgeo", b.data(), b.size(), false};
-        return error_of([&] { parse_binary_json(source, *JsonSelection::everything()); });
+        return test::format_error_of([&] { parse_binary_json(source, *JsonSelection::everything()); });
     };
     CHECK_THAT(error({0x7f, 'N', 'S', 'J', 'x', 0x5b}), Catch::Contains("bad magic number"));
     CHECK_THAT(error({0x7f, 'N', 'S', 'J', 'b', 0x26, 9}), Catch::Contains("reference to undefined string token 9 at byte 5"));
@@ -342,7 +320,7 @@ TEST_CASE("Python literals as the .npy header writes them", "[io][parsers]") {
     CHECK(v.get("esc")->string == "a'b");
     CHECK(!v.get("missing"));
 
-    auto error = [](const std::string& text) { return error_of([&] { python_literal(text); }); };
+    auto error = [](const std::string& text) { return test::format_error_of([&] { python_literal(text); }); };
     CHECK_THAT(error("{'a': 'b"), Catch::StartsWith("mem.bin: bad literal at byte 8: a string is not closed"));
     CHECK_THAT(error("{'a' 1}"), Catch::Contains("expected ':' after key 'a'"));
     CHECK_THAT(error("{1: 2}"), Catch::Contains("a dictionary key is not a string"));
@@ -374,11 +352,11 @@ TEST_CASE("zip archives: stored and deflated members, CRC, refusals", "[io][pars
         Source damaged{"mem.npz", corrupt.data(), corrupt.size(), false};
         ZipReader damaged_reader(damaged);
         auto damaged_members = damaged_reader.members();
-        CHECK(!error_of([&] { damaged_reader.extract(damaged_members[0], budget); }).empty());
+        CHECK(!test::format_error_of([&] { damaged_reader.extract(damaged_members[0], budget); }).empty());
     }
     auto error = [](const Bytes& zip) {
         Source source{"mem.npz", zip.data(), zip.size(), false};
-        return error_of([&] {
+        return test::format_error_of([&] {
             ZipReader reader(source);
             std::uint64_t budget = 1 << 20;
             for (const auto& m : reader.members()) reader.extract(m, budget);
