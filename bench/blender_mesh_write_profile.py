@@ -58,10 +58,10 @@ def prepare(addon_path):
         print(f"surfaces already in {CACHE}")
         return
     paths = blender_frame_change.prepare_frames()
-    # The add-on's defaults, as bench/blender_frame_change.py sets them (handlers.reconstruction_arguments).
+    # The add-on's defaults, as bench/blender_frame_change.py sets them (update.reconstruction_arguments).
     arguments = dict(particle_radius=blender_frame_change.RADIUS, smoothing_length=2.0, cube_size=CUBE_SIZE,
                      iso_threshold=0.6, mesh_cleanup=False, mesh_cleanup_snap_distance=-1.0, decimate_barnacles=True,
-                     smoothing_iterations=25, smoothing_beta=1.0, smoothing_weights=True, weights_normalization=0.0,
+                     smoothing_iterations=25, smoothing_strength=1.0, smoothing_weights=True, weights_normalization=0.0,
                      volume_restoration=True, output_weights=False, normals=True, normal_smoothing_iterations=10,
                      sph_normals=False, threads=0, memory_budget=0)
     CACHE.mkdir(parents=True, exist_ok=True)

@@ -77,7 +77,9 @@ def child(args):
             full = dict(decimate_barnacles=True, smoothing_iterations=25, normal_smoothing_iterations=10)
 
             def run(positions):
-                kwargs = full if args.mode == "full" else dict(normals=False)
+                # Reconstruction alone: every post-processing stage off (the defaults run the whole pipeline).
+                kwargs = full if args.mode == "full" else dict(decimate_barnacles=False, smoothing_iterations=0,
+                                                               normals=False, normal_smoothing_iterations=0)
                 mesh = meniscus.reconstruct(positions, RADIUS, SMOOTHING_LENGTH, args.cube, ISO, threads=args.threads, **kwargs)
                 return mesh, mesh.vertices, mesh.triangles, mesh.normals
         else:

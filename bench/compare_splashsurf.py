@@ -23,9 +23,10 @@ PARAMS = dict(particle_radius=0.025, smoothing_length=2.0, cube_size=0.5, iso_th
 
 
 def run_meniscus(positions):
-    mesh = meniscus.reconstruct(positions, PARAMS["particle_radius"], PARAMS["smoothing_length"], PARAMS["cube_size"],
-                                PARAMS["iso_threshold"], decimate_barnacles=True, smoothing_iterations=25,
-                                normal_smoothing_iterations=10, keep_raw_mesh=True)
+    mesh = meniscus.reconstruct(positions, PARAMS["particle_radius"], smoothing_length=PARAMS["smoothing_length"],
+                                cube_size=PARAMS["cube_size"], iso_threshold=PARAMS["iso_threshold"],
+                                decimate_barnacles=True, smoothing_iterations=25, normal_smoothing_iterations=10,
+                                keep_raw_mesh=True)
     return mesh.vertices, mesh.triangles, mesh.raw.vertices, mesh.raw.triangles
 
 

@@ -41,17 +41,7 @@ from meniscus import _core  # noqa: E402
 SHARED = ROOT.parent / "shared" / "data" / "splashsurf"
 SEQUENCE = ROOT.parent / "shared" / "data" / "sequence"
 RESULTS = ROOT / "bench" / "results" / "smoothing"
-FRAMES = [
-    "bunny_frame_14_7705_particles.vtk",
-    "dam_break_frame_9_6859_particles.bgeo",
-    "double_dam_break_frame_01_4732_particles.vtk",
-    "double_dam_break_frame_26_4732_particles.vtk",
-    "hilbert_46843_particles.bgeo",
-    "hilbert2_7954_particles.vtk",
-    "pentagonal_hexecontahedron_32286_particles.bgeo",
-    "ParticleData_Fluid_5.vtk",
-    "ParticleData_Fluid_50.bgeo",
-]
+FRAMES = sorted(p.name for p in SHARED.glob("*") if p.suffix in (".vtk", ".bgeo"))  # every shared frame
 THIN_TUBES = ("hilbert2_7954_particles.vtk", "hilbert_46843_particles.bgeo")
 CUBES = (0.25, 0.5, 0.75, 1.0)
 R, SMOOTHING_LENGTH, ISO = 0.025, 2.0, 0.6

@@ -28,7 +28,8 @@ particles = meniscus.read_particles(args.frame)
 smoothed = meniscus.reconstruct(particles.positions, 0.025, cube_size=0.5, decimate_barnacles=True, smoothing_iterations=25,
                                 normal_smoothing_iterations=10, output_weights=True, keep_raw_mesh=True)
 raw = smoothed.raw
-raw_normals = meniscus.reconstruct(particles.positions, 0.025, cube_size=0.5).normals
+RAW = dict(decimate_barnacles=False, smoothing_iterations=0, normal_smoothing_iterations=0)  # marching cubes alone
+raw_normals = meniscus.reconstruct(particles.positions, 0.025, cube_size=0.5, **RAW).normals
 
 for obj in list(bpy.data.objects):
     bpy.data.objects.remove(obj, do_unlink=True)
@@ -105,7 +106,7 @@ for name, mesh, normals, mat, weights in [
     ("raw", raw, raw_normals, material("raw", grey), None),
     ("smoothed", smoothed, smoothed.normals, material("smoothed", grey), None),
     ("weights", raw, raw_normals, material("weights", grey, by_weights=True), meniscus.reconstruct(
-        particles.positions, 0.025, cube_size=0.5, decimate_barnacles=False, output_weights=True).attributes["weights"]),
+        particles.positions, 0.025, cube_size=0.5, output_weights=True, **RAW).attributes["weights"]),
 ]:
     obj = show(name, mesh, normals, mat, weights)
     scene.render.filepath = str((out / f"{name}.png").resolve())

@@ -1,5 +1,5 @@
-// libFuzzer harness: read_mesh on arbitrary bytes. PLY is recognised by its magic whatever the name, so naming the
-// input .obj reaches both the PLY and the OBJ reader.
+// libFuzzer harness: read_mesh on arbitrary bytes. PLY and legacy VTK are recognised by their headers whatever the
+// name, so naming the input .obj reaches the PLY, the VTK and the OBJ reader.
 #include "fuzz_common.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -139,6 +139,20 @@ def main():
     vertices = np.arange(36, dtype="<f4").tobytes()
     faces = b"".join(b"\x03" + np.array(f, "<i4").tobytes() for f in ([0, 1, 2], [0, 2, 3]))
     write("mesh", "binary_mesh.ply", header + vertices + faces)
+    # Legacy VTK meshes: the layout write_mesh writes (binary 4.x polygons, normals, SCALARS, VECTORS, FIELD), and
+    # ASCII 5.x OFFSETS / CONNECTIVITY with a quad.
+    be = lambda values, dtype: np.asarray(values, dtype).tobytes() + b"\n"
+    write("mesh", "binary_mesh.vtk",
+          b"# vtk DataFile Version 4.2\nmeniscus surface mesh\nBINARY\nDATASET POLYDATA\nPOINTS 4 float\n" +
+          be(np.arange(12), ">f4") + b"POLYGONS 2 8\n" + be([3, 0, 1, 2, 3, 0, 2, 3], ">i4") +
+          b"POINT_DATA 4\nNORMALS normals float\n" + be(np.ones(12), ">f4") +
+          b"SCALARS density float 1\nLOOKUP_TABLE default\n" + be(np.arange(4), ">f4") +
+          b"VECTORS velocity float\n" + be(np.arange(12), ">f4") +
+          b"FIELD FieldData 1\nuv 2 4 float\n" + be(np.arange(8), ">f4"))
+    write("mesh", "ascii_mesh_51.vtk",
+          b"# vtk DataFile Version 5.1\nquad\nASCII\nDATASET POLYDATA\nPOINTS 4 float\n0 0 0 1 0 0 1 1 0 0 1 0\n"
+          b"POLYGONS 2 4\nOFFSETS vtktypeint64\n0 4\nCONNECTIVITY vtktypeint64\n0 1 2 3\n"
+          b"POINT_DATA 4\nNORMALS n float\n0 0 1 0 0 1 0 0 1 0 0 1\n")
 
     total = sum(f.stat().st_size for f in CORPUS.rglob("*") if f.is_file())
     print(f"corpus: {sum(1 for f in CORPUS.rglob('*') if f.is_file())} seeds, {total / 1e3:.0f} kB")

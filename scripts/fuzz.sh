@@ -40,7 +40,7 @@ flags=(-std=c++17 -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined -f
 
 # The readers, built once with coverage instrumentation (rebuilt when a source or header is newer).
 objects=()
-for src in $(find native/core/io -name '*.cpp' | sort) native/core/base/platform.cpp; do
+for src in $(find native/core/io -name '*.cpp' | sort) native/core/base/platform.cpp native/core/base/decimal.cpp; do
   obj="$out/obj/$(echo "${src#native/core/}" | tr / _ | sed 's/\.cpp$//').o"
   if [ ! -f "$obj" ] || [ "$src" -nt "$obj" ] || [ -n "$(find native/core/io native/core/base -name '*.h' -newer "$obj")" ]; then
     echo "fuzz: compiling $src"

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -31,7 +32,7 @@
 #include "parameters.h"
 #include "pipeline.h"
 #include "base/platform.h"
-#include "post/postprocess.h"
+#include "analysis/quality.h"
 #include "surface/reconstruction.h"
 
 namespace fs = std::filesystem;
@@ -209,6 +210,22 @@ void add_parameter_flags(CLI::App& command, Parameters& parameters) {
         const std::string flag = spec.cli.substr(long_start, spec.cli.find(',', long_start) - long_start);
         std::string help = spec.help;
         if (!spec.unit.empty()) help += " [" + spec.unit + "]";
+        if (spec.is_vector()) {
+            CLI::Option* option = command.add_option(
+                spec.cli,
+                [&parameters, &spec, flag](const CLI::results_t& results) {
+                    Vector3 value{};
+                    for (std::size_t k = 0; k < 3; ++k)
+                        if (k >= results.size() || !io_detail::parse_double(results[k], value[k]))
+                            throw CLI::ValidationError(flag, "takes three numbers (x y z)");
+                    if (auto problem = spec.problem(std::optional<Vector3>(value))) throw CLI::ValidationError(flag, *problem);
+                    spec.set_vector(parameters, value);
+                    return true;
+                },
+                help);
+            option->expected(3)->type_name("X Y Z");
+            continue;
+        }
         if (spec.cli_style == CliStyle::value) help += "; " + spec.allowed();
         CLI::Option* option = command.add_option(
             spec.cli,
@@ -329,8 +346,28 @@ void add_compatibility_flags(CLI::App& command, ReconstructArgs& args) {
     command.add_option("--subdomain-cubes", subdomain_cubes, "No effect: Meniscus's bricks are 32 cubes wide")->group(group);
 }
 
+// validate() names parameters as the schema does (mesh_aabb_min); here they are called by their flags.
+void validate_in_flag_names(const Parameters& parameters) {
+    try {
+        validate(parameters);
+    } catch (const InputError& error) {
+        std::string message = error.what();
+        for (const ParameterSpec& spec : parameter_schema()) {
+            const std::size_t start = spec.cli.find("--");
+            const std::string flag = spec.cli.substr(start, spec.cli.find(',', start) - start);
+            for (std::size_t at = message.find(spec.name); at != std::string::npos; at = message.find(spec.name, at + flag.size())) {
+                const bool whole = (at == 0 || !(std::isalnum(static_cast<unsigned char>(message[at - 1])) || message[at - 1] == '_')) &&
+                                   (at + spec.name.size() == message.size() ||
+                                    !(std::isalnum(static_cast<unsigned char>(message[at + spec.name.size()])) || message[at + spec.name.size()] == '_'));
+                if (whole) message.replace(at, spec.name.size(), flag);
+            }
+        }
+        throw InputError(message);
+    }
+}
+
 int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
-    validate(args.parameters);
+    validate_in_flag_names(args.parameters);
     if (args.output.empty()) args.output = default_output_name(args.input);
     args.output = in_output_dir(args.output_dir, args.output);
     args.raw_output = in_output_dir(args.output_dir, raw_output_pattern(args.raw_output, args.output));
@@ -421,6 +458,11 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
     json report;
     report["parameters"] = json::object();
     for (const ParameterSpec& spec : parameter_schema()) {
+        if (spec.is_vector()) {
+            const auto vector = spec.get_vector(args.parameters);
+            report["parameters"][spec.name] = vector ? json(std::vector<double>(vector->begin(), vector->end())) : json(nullptr);
+            continue;
+        }
         const double value = spec.get(args.parameters);
         if (spec.type == ParameterType::flag)
             report["parameters"][spec.name] = value != 0.0;

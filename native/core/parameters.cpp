@@ -42,6 +42,17 @@ public:
     static Spec real(const char* name, double Group::*field, Group Parameters::*group) {
         return make(ParameterType::real, name, group, field);
     }
+    template <class Group>
+    static Spec vector(const char* name, std::optional<Vector3> Group::*field, Group Parameters::*group) {
+        Spec s;
+        s.spec_.name = name;
+        s.spec_.type = ParameterType::vector3;
+        s.spec_.get = [](const Parameters&) { return 0.0; };
+        s.spec_.set = [](Parameters&, double) {};
+        s.spec_.get_vector = [group, field](const Parameters& p) { return p.*group.*field; };
+        s.spec_.set_vector = [group, field](Parameters& p, const std::optional<Vector3>& value) { p.*group.*field = value; };
+        return s;
+    }
 
     Spec& group(const char* g) { spec_.group = g; return *this; }
     Spec& label(const char* l) { spec_.label = l; return *this; }
@@ -73,7 +84,7 @@ public:
     }
     Spec& depends_on(const char* name) { spec_.depends_on = name; return *this; }
     ParameterSpec done() {
-        if (!spec_.automatic) spec_.suggested = spec_.required ? suggested_ : spec_.default_value();
+        if (!spec_.automatic && !spec_.is_vector()) spec_.suggested = spec_.required ? suggested_ : spec_.default_value();
         if (spec_.type == ParameterType::flag) spec_.soft_maximum = 1.0;
         return std::move(spec_);
     }
@@ -176,6 +187,31 @@ std::vector<ParameterSpec> make_schema() {
                     .help("Store the feature weights as the vertex attribute 'weights' (0 in splashes, 1 in calm "
                           "water), e.g. to shade foam").done());
 
+    // ---- container (splashsurf's boxes) ------------------------------------------------------------------------
+    using C = ContainerParams;
+    constexpr auto container = &Parameters::container;
+    s.push_back(Spec::vector("particle_aabb_min", &C::particle_aabb_min, container).group("container")
+                    .label("Particle Box Min").cli("--particle-aabb-min").unit("scene units")
+                    .help("Lower corner of the box of particles to keep: particles outside it are dropped before the "
+                          "reconstruction (with a count in the stats)").done());
+    s.push_back(Spec::vector("particle_aabb_max", &C::particle_aabb_max, container).group("container")
+                    .label("Particle Box Max").cli("--particle-aabb-max").unit("scene units")
+                    .help("Upper corner of the box of particles to keep").done());
+    s.push_back(Spec::vector("mesh_aabb_min", &C::mesh_aabb_min, container).group("container").label("Container Min")
+                    .cli("--mesh-aabb-min").unit("scene units")
+                    .help("Lower corner of the container: the surface is cut at its walls, so that fluid resting on a "
+                          "floor or against a wall meets it flat and flush").done());
+    s.push_back(Spec::vector("mesh_aabb_max", &C::mesh_aabb_max, container).group("container").label("Container Max")
+                    .cli("--mesh-aabb-max").unit("scene units").help("Upper corner of the container").done());
+    s.push_back(Spec::flag("mesh_aabb_cap", &C::mesh_aabb_cap, container).group("container").label("Closed At Walls")
+                    .cli("--mesh-aabb-cap")
+                    .help("Close the surface where the container cuts it, with flat faces on the walls (renderers need a "
+                          "closed surface for refraction and absorption); off: an open cut").done());
+    s.push_back(Spec::flag("mesh_aabb_clamp_verts", &C::mesh_aabb_clamp_verts, container).group("container")
+                    .label("Clamp To Walls").cli("--mesh-aabb-clamp-verts")
+                    .help("With an open cut: move the vertices outside the container onto its walls (splashsurf's "
+                          "clamping; closed surfaces always end exactly on the walls)").done());
+
     // ---- execution --------------------------------------------------------------------------------------------
     s.push_back(Spec::count("threads", &E::threads, execution).group("execution").label("Threads").cli("-n,--threads")
                     .range(1, 4096).soft(1, 64).automatic(0.0, "all", 4.0)
@@ -215,6 +251,7 @@ const ParameterSpec& find_parameter(const std::string& name) {
 
 std::string ParameterSpec::allowed() const {
     if (type == ParameterType::flag) return "on or off";
+    if (type == ParameterType::vector3) return "three numbers (x y z)";
     std::string lower, upper;
     if (!std::isinf(minimum)) lower = (minimum_open ? "greater than " : "at least ") + format_number(minimum);
     if (!std::isinf(maximum) && maximum < 1000000) upper = (maximum_open ? "less than " : "at most ") + format_number(maximum);
@@ -239,9 +276,37 @@ std::optional<std::string> ParameterSpec::problem(double value) const {
     return std::nullopt;
 }
 
+std::optional<std::string> ParameterSpec::problem(const std::optional<Vector3>& value) const {
+    if (!value) return std::nullopt;
+    for (double x : *value)
+        if (!std::isfinite(x)) return "must be three finite numbers, got " + format_number(x) + " in it";
+    return std::nullopt;
+}
+
+namespace {
+
+// Both corners of a box or neither, and the lower one below the upper one in every coordinate.
+void validate_box(const std::optional<Vector3>& lower, const std::optional<Vector3>& upper, const char* lower_name, const char* upper_name) {
+    if (lower.has_value() != upper.has_value())
+        throw InputError(std::string(lower ? lower_name : upper_name) + " is given without " + (lower ? upper_name : lower_name) +
+                         ": a box needs both corners");
+    if (!lower) return;
+    for (int k = 0; k < 3; ++k)
+        if (!((*lower)[k] < (*upper)[k]))
+            throw InputError(std::string(lower_name) + " must be below " + upper_name + " in every coordinate, got " +
+                             format_number((*lower)[k]) + " and " + format_number((*upper)[k]) + " in " + "xyz"[k]);
+}
+
+}  // namespace
+
 void validate(const Parameters& parameters) {
-    for (const auto& spec : parameter_schema())
-        if (auto problem = spec.problem(spec.get(parameters))) throw InputError(spec.name + " " + *problem);
+    for (const auto& spec : parameter_schema()) {
+        const auto problem = spec.is_vector() ? spec.problem(spec.get_vector(parameters)) : spec.problem(spec.get(parameters));
+        if (problem) throw InputError(spec.name + " " + *problem);
+    }
+    const ContainerParams& c = parameters.container;
+    validate_box(c.particle_aabb_min, c.particle_aabb_max, "particle_aabb_min", "particle_aabb_max");
+    validate_box(c.mesh_aabb_min, c.mesh_aabb_max, "mesh_aabb_min", "mesh_aabb_max");
 }
 
 void validate(const ReconstructionParams& reconstruction) {

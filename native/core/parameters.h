@@ -9,6 +9,7 @@
 //
 // Names and conventions follow splashsurf: lengths given "relative" are multiples of the particle radius.
 #pragma once
+#include <array>
 #include <cstddef>
 #include <functional>
 #include <optional>
@@ -52,14 +53,26 @@ struct ExecutionOptions {
     std::size_t memory_budget_bytes() const;  // 0 when automatic
 };
 
+using Vector3 = std::array<double, 3>;
+
+// The fluid's container (splashsurf's boxes). Unset boxes: no container.
+struct ContainerParams {
+    std::optional<Vector3> particle_aabb_min, particle_aabb_max;  // particles outside are dropped before anything else
+    std::optional<Vector3> mesh_aabb_min, mesh_aabb_max;          // the surface is cut at this box
+    bool mesh_aabb_cap = true;           // the cut closed by flat faces on the walls; off: an open cut
+    bool mesh_aabb_clamp_verts = false;  // with an open cut: vertices outside moved onto the box's faces
+};
+
 // Every parameter of one pipeline run, at its default unless set.
 struct Parameters {
     ReconstructionParams reconstruction;
     PostprocessParams postprocess;
     ExecutionOptions execution;
+    ContainerParams container;
 };
 
-enum class ParameterType { flag, count, real };
+// flag, count, real: one number (get / set); vector3: three numbers or unset (get_vector / set_vector).
+enum class ParameterType { flag, count, real, vector3 };
 
 // How the command line spells a value: a number (or the automatic word), or on|off (a bare switch means on).
 enum class CliStyle { value, on_off };
@@ -84,10 +97,15 @@ struct ParameterSpec {
 
     std::function<double(const Parameters&)> get;
     std::function<void(Parameters&, double)> set;
+    std::function<std::optional<Vector3>(const Parameters&)> get_vector;
+    std::function<void(Parameters&, const std::optional<Vector3>&)> set_vector;
 
-    double default_value() const { return get(Parameters{}); }
+    bool is_vector() const { return type == ParameterType::vector3; }
+    double default_value() const { return is_vector() ? 0.0 : get(Parameters{}); }
     // What is wrong with a value ("must be greater than 0 and at most 1, got 0"), or nothing when it is allowed.
     std::optional<std::string> problem(double value) const;
+    // The same for a vector: every coordinate a finite number (unset is always allowed).
+    std::optional<std::string> problem(const std::optional<Vector3>& value) const;
     // The allowed values in words: "greater than 0 and at most 1", "a whole number from 0", "on or off".
     std::string allowed() const;
 };
@@ -96,7 +114,8 @@ const std::vector<ParameterSpec>& parameter_schema();
 // The parameter of that name; InputError listing the names when there is none.
 const ParameterSpec& find_parameter(const std::string& name);
 
-// InputError naming the first parameter whose value is not allowed (by its schema name).
+// InputError naming the first parameter whose value is not allowed (by its schema name), or a box whose corners are
+// not both given or not below one another.
 void validate(const Parameters& parameters);
 void validate(const ReconstructionParams& parameters);
 

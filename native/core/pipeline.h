@@ -1,25 +1,18 @@
-// The whole per-frame pipeline, one function of particles and parameters:
-// particles -> reconstruction (neighbourhood, densities and neighbour counts, level set, marching cubes)
-// -> mesh cleanup or barnacle decimation -> feature weights -> weighted Laplacian smoothing -> normals
-// (area-weighted, smoothed; or SPH) -> particle attributes interpolated onto the final vertices.
+// The whole per-frame pipeline, one function of particles and parameters (pipeline.cpp lists the stages):
+// particles -> reconstruction (neighbourhood, densities and neighbour counts, level set, marching cubes; surface/)
+// -> mesh cleanup and/or barnacle decimation -> feature weights -> weighted Laplacian smoothing -> volume
+// restoration -> normals (area-weighted, smoothed; or SPH) -> particle attributes carried onto the final vertices
+// (post/, sph/).
 #pragma once
-#include <string>
 #include <vector>
 
+#include "base/attributes.h"
+#include "base/stats.h"
 #include "mesh/mesh.h"
 #include "parameters.h"
 #include "sph/particles.h"
-#include "base/stats.h"
 
 namespace meniscus {
-
-// A per-particle attribute given by the caller, read in place: values[i * components + k].
-struct AttributeInput {
-    std::string name;
-    const float* values = nullptr;
-    int components = 1;
-    bool integral = false;  // whole numbers (ids, labels): the nearest particle's value, not an average
-};
 
 struct PipelineOptions : Parameters {
     bool keep_raw_mesh = false;  // also return the mesh as marching cubes made it

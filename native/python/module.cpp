@@ -19,10 +19,11 @@
 #include "io/io.h"
 #include "parameters.h"
 #include "pipeline.h"
+#include "analysis/quality.h"
 #include "analysis/scale_metrics.h"
 #include "mesh/adjacency.h"
+#include "mesh/components.h"
 #include "post/heat_smoothing.h"
-#include "post/postprocess.h"
 #include "post/wall_constraints.h"
 
 namespace py = pybind11;
@@ -144,10 +145,31 @@ double value_from_python(const ParameterSpec& spec, const py::handle& value) {
 
 // Keyword arguments -> parameters: the one place Python values meet the schema. Unknown names, wrong types and
 // values outside the allowed range are refused naming the keyword; a parameter not given keeps its default.
+// A box corner: None (unset) or three numbers.
+std::optional<Vector3> vector_from_python(const ParameterSpec& spec, const py::handle& value) {
+    if (value.is_none()) return std::nullopt;
+    const std::string got = py::repr(value).cast<std::string>();
+    if (!py::isinstance<py::sequence>(value) || py::isinstance<py::str>(value) || py::len(value) != 3)
+        throw InputError(spec.name + " must be None or three numbers (x, y, z), got " + got);
+    Vector3 out{};
+    const py::sequence items = py::reinterpret_borrow<py::sequence>(value);
+    for (int k = 0; k < 3; ++k) {
+        if (!PyNumber_Check(items[k].ptr())) throw InputError(spec.name + " must be None or three numbers (x, y, z), got " + got);
+        out[k] = py::float_(items[k]).cast<double>();
+    }
+    return out;
+}
+
 Parameters parameters_from_python(const py::dict& values) {
     Parameters parameters;
     for (const auto& item : values) {
         const ParameterSpec& spec = find_parameter(py::str(item.first));
+        if (spec.is_vector()) {
+            const std::optional<Vector3> vector = vector_from_python(spec, item.second);
+            if (auto problem = spec.problem(vector)) throw InputError(spec.name + " " + *problem);
+            spec.set_vector(parameters, vector);
+            continue;
+        }
         const double value = value_from_python(spec, item.second);
         if (auto problem = spec.problem(value)) throw InputError(spec.name + " " + *problem);
         spec.set(parameters, value);
@@ -273,7 +295,7 @@ int run_cli_in_python(const std::vector<std::string>& arguments) {
 }
 
 py::list schema_to_list() {
-    static const char* const kTypes[] = {"flag", "count", "real"};
+    static const char* const kTypes[] = {"flag", "count", "real", "vector3"};
     static const char* const kCliStyles[] = {"value", "on_off"};
     py::list out;
     for (const auto& spec : parameter_schema()) {
@@ -286,7 +308,7 @@ py::list schema_to_list() {
         d["cli_style"] = kCliStyles[static_cast<int>(spec.cli_style)];
         d["unit"] = spec.unit;
         d["help"] = spec.help;
-        d["default"] = spec.default_value();
+        d["default"] = spec.is_vector() ? py::object(py::none()) : py::object(py::float_(spec.default_value()));
         d["minimum"] = spec.minimum;
         d["maximum"] = spec.maximum;
         d["minimum_open"] = spec.minimum_open;
@@ -328,8 +350,15 @@ PYBIND11_MODULE(_core, m) {
           "Runs the pipeline on (N, 3) float32/float64 positions with parameters named as in parameter_schema(); "
           "returns a dict of numpy arrays and stats.");
     m.def("parameter_schema", &schema_to_list, "Every pipeline parameter: name, type, default, range, unit, help, spellings.");
-    m.def("parameter_problem", [](const std::string& name, double value) -> py::object {
-        const auto problem = find_parameter(name).problem(value);
+    m.def("parameter_problem", [](const std::string& name, const py::object& value) -> py::object {
+        const ParameterSpec& spec = find_parameter(name);
+        std::optional<std::string> problem;
+        try {
+            problem = spec.is_vector() ? spec.problem(vector_from_python(spec, value)) : spec.problem(value_from_python(spec, value));
+        } catch (const InputError& error) {
+            const std::string message = error.what();
+            problem = message.substr(std::min(message.size(), spec.name.size() + 1));
+        }
         return problem ? py::object(py::str(*problem)) : py::object(py::none());
     }, py::arg("name"), py::arg("value"), "What is wrong with a value for a parameter ('must be ..., got ...'), or None.");
     m.def("format_number", &format_number, py::arg("value"), "A number as people write it (0, 0.5, 2.5e-06).");

@@ -16,13 +16,13 @@ from . import _core
 class Parameter:
     name: str                 # keyword of reconstruct() and the Blender property
     group: str                # surface, mesh, smoothing, normals, output, execution
-    type: str                 # "flag", "count" or "real"
+    type: str                 # "flag", "count", "real" or "vector3" (three numbers or None: unset)
     label: str                # as Blender shows it
     cli: str                  # command-line flag(s)
     cli_style: str            # "value" or "on_off" (a bare switch means on)
     unit: str
     help: str
-    default: float
+    default: Optional[float]  # None for vector3 (unset)
     minimum: float
     maximum: float
     minimum_open: bool
@@ -43,6 +43,10 @@ class Parameter:
 
     def problem(self, value) -> Optional[str]:
         """What is wrong with a value ('must be greater than 0 and at most 1, got 0'), or None."""
+        if self.type == "vector3":
+            return _core.parameter_problem(self.name, None if value is None else [float(x) for x in value])
+        if self.type == "flag":
+            return _core.parameter_problem(self.name, bool(value))
         return _core.parameter_problem(self.name, float(value))
 
     def describe(self) -> str:
@@ -53,7 +57,9 @@ class Parameter:
         return f"{self.help}{unit}{allowed}; {default}."
 
 
-def convert(parameter: Parameter, value: float):
+def convert(parameter: Parameter, value):
+    if parameter.type == "vector3":
+        return None if value is None else tuple(float(x) for x in value)
     if parameter.type == "flag":
         return bool(value)
     if parameter.type == "count":
@@ -63,6 +69,8 @@ def convert(parameter: Parameter, value: float):
 
 def format_value(parameter: Parameter, value: float) -> str:
     """A value as people read it: True/False, whole numbers without a point, 'auto' where it means automatic."""
+    if parameter.type == "vector3":
+        return "unset" if value is None else "(" + ", ".join(_core.format_number(float(x)) for x in value) + ")"
     if parameter.automatic is not None and value == parameter.automatic:
         return f"{_core.format_number(value)} ({parameter.automatic_word})"
     if parameter.type == "flag":

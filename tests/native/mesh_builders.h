@@ -1,18 +1,24 @@
-// Small meshes built in code for the post-processing tests: platonic spheres, cube, torus, a noisy sphere, a
-// marching-tetrahedra mesh of an implicit function (irregular like marching cubes output: valence 3 vertices,
-// slivers next to grid points), and editing helpers that plant the marching-cubes "barnacle" configurations.
+// What the native tests build their cases from, once: small meshes built in code (platonic spheres, cube, torus, a
+// noisy sphere, a marching-tetrahedra mesh of an implicit function, irregular like marching cubes output: valence 3
+// vertices, slivers next to grid points), editing helpers that plant the marching-cubes "barnacle" configurations,
+// checks on meshes, and the shared particle frames with their parameters.
 #pragma once
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <functional>
 #include <map>
 #include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
+#include "mesh/adjacency.h"
+#include "mesh/geometry.h"
 #include "mesh/mesh.h"
+#include "parameters.h"
 
 namespace meniscus {
 namespace test {
@@ -264,10 +270,9 @@ inline TriMesh marching_tetrahedra(const std::function<double(double, double, do
     };
     // Orients triangle (a, b, c) so that its normal points from the inside corners to the outside ones.
     auto emit = [&](int32_t a, int32_t b, int32_t c, V3 inward_to_outward) {
-        const V3 pa = vertex_of(m, a), pb = vertex_of(m, b), pc = vertex_of(m, c);
-        const V3 e1{pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]}, e2{pc[0] - pa[0], pc[1] - pa[1], pc[2] - pa[2]};
-        const V3 nn{e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-        if (nn[0] * inward_to_outward[0] + nn[1] * inward_to_outward[1] + nn[2] * inward_to_outward[2] >= 0) add_triangle(m, a, b, c);
+        const int32_t corners[3] = {a, b, c};
+        const Vec3d n = triangle_cross(m.vertices.data(), corners);
+        if (dot(n, Vec3d{inward_to_outward[0], inward_to_outward[1], inward_to_outward[2]}) >= 0) add_triangle(m, a, b, c);
         else add_triangle(m, a, c, b);
     };
     const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
@@ -303,6 +308,105 @@ inline TriMesh marching_tetrahedra(const std::function<double(double, double, do
                     }
                 }
     return m;
+}
+
+// ---- checks ----------------------------------------------------------------------------------------------------
+
+inline bool all_finite(const std::vector<float>& values) {
+    for (float x : values)
+        if (!std::isfinite(x)) return false;
+    return true;
+}
+
+// Every triangle of a sphere-like mesh centred at c faces away from c.
+inline bool faces_outward(const TriMesh& m, V3 c = {0, 0, 0}) {
+    for (std::size_t t = 0; t < m.num_triangles(); ++t) {
+        const Vec3d n = triangle_cross(m.vertices.data(), &m.triangles[3 * t]);
+        const Vec3d a = vertex_position(m.vertices.data(), m.triangles[3 * t]);
+        if (dot(n, a - Vec3d{c[0], c[1], c[2]}) <= 0) return false;
+    }
+    return true;
+}
+
+// Signed enclosed volume measured from the origin (divergence theorem).
+inline double signed_volume(const TriMesh& m) {
+    double volume = 0.0;
+    for (std::size_t t = 0; t < m.num_triangles(); ++t) {
+        const int32_t* c = &m.triangles[3 * t];
+        volume += tetrahedron_volume(vertex_position(m.vertices.data(), c[0]), vertex_position(m.vertices.data(), c[1]),
+                                     vertex_position(m.vertices.data(), c[2]));
+    }
+    return volume;
+}
+
+// FNV-1a over the bits of the vertices and the triangles: equal for bit-identical meshes.
+inline uint64_t mesh_hash(const TriMesh& mesh) {
+    uint64_t h = 1469598103934665603ull;
+    auto mix = [&](uint32_t v) { h = (h ^ v) * 1099511628211ull; };
+    for (float v : mesh.vertices) {
+        uint32_t bits;
+        std::memcpy(&bits, &v, 4);
+        mix(bits);
+    }
+    for (int32_t t : mesh.triangles) mix(static_cast<uint32_t>(t));
+    return h;
+}
+
+// ---- meshes for the post-processing tests ----------------------------------------------------------------------
+
+// A bumpy blob: sphere of radius 1 with a few low-frequency waves, so marching cubes/tetrahedra of it produce
+// every kind of sliver near lattice points.
+inline double blob(double x, double y, double z) {
+    const double r = std::sqrt(x * x + y * y + z * z);
+    return 1.0 - r + 0.08 * std::sin(5.1 * x + 0.3) * std::sin(4.3 * y + 1.1) * std::sin(3.7 * z + 0.7);
+}
+
+// Test mesh with planted barnacles: an octasphere (six valence-4 vertices on the axes, valence 6 elsewhere) with a
+// single-vertex configuration at each of the six axis vertices and double-vertex configurations at valence-6
+// vertices far from them and from each other.
+inline TriMesh barnacle_sphere(std::size_t& singles, std::size_t& doubles) {
+    TriMesh m = make_octasphere(4);
+    const std::size_t base = m.num_vertices();
+    const MeshAdjacency adj = build_adjacency(m, 1);
+    std::vector<int32_t> axis, picks;
+    for (int32_t v = 0; v < static_cast<int32_t>(base); ++v)
+        if (adj.valence(v) == 4) axis.push_back(v);
+    // Valence-6 vertices whose position is near the diagonal directions (+-1, +-1, +-1)/sqrt(3): far from the axes.
+    for (int32_t v = 0; v < static_cast<int32_t>(base); ++v) {
+        const V3 p = vertex_of(m, v);
+        if (adj.valence(v) != 6) continue;
+        const double s = std::fabs(p[0]) + std::fabs(p[1]) + std::fabs(p[2]);
+        bool far = s > 1.70;
+        for (int32_t q : picks) {
+            const V3 o = vertex_of(m, q);
+            far = far && (p[0] - o[0]) * (p[0] - o[0]) + (p[1] - o[1]) * (p[1] - o[1]) + (p[2] - o[2]) * (p[2] - o[2]) > 0.5;
+        }
+        if (far) picks.push_back(v);
+    }
+    for (int32_t v : axis) insert_single_configuration(m, v);
+    for (int32_t v : picks) insert_double_configuration(m, v);
+    singles = axis.size();
+    doubles = picks.size();
+    return m;
+}
+
+// A vertex attribute "id" holding each vertex's index, to follow vertices through a stage that renumbers them.
+inline void add_index_attribute(TriMesh& m) {
+    Attribute id{"id", 1, {}};
+    for (std::size_t v = 0; v < m.num_vertices(); ++v) id.values.push_back(static_cast<float>(v));
+    m.attributes.push_back(id);
+}
+
+// ---- particle frames ---------------------------------------------------------------------------------------------
+
+// A frame of ../shared/data by its name there ("splashsurf/bunny_frame_14_7705_particles.vtk").
+inline std::string shared_frame(const std::string& name) { return std::string(MENISCUS_SHARED_DATA) + "/" + name; }
+
+inline ReconstructionParams reconstruction_params(double radius, double cube) {
+    ReconstructionParams p;
+    p.particle_radius = radius;
+    p.cube_size = cube;
+    return p;
 }
 
 }  // namespace test

@@ -21,45 +21,13 @@
 #include "base/errors.h"
 #include "io/io.h"
 #include "pipeline.h"
-#include "test_files.h"
+#include "reader_checks.h"
 
 using namespace meniscus;
 using namespace meniscus::test;
 namespace fs = std::filesystem;
 
 namespace {
-
-const std::string kShared = MENISCUS_SHARED_DATA;
-const std::string kVariants = std::string(MENISCUS_TEST_DATA) + "/formats/variants";
-const std::string kFormats = std::string(MENISCUS_TEST_DATA) + "/formats";
-
-// Reads the file: "" and the data on success, else the FormatError message (any other exception fails the test).
-std::string outcome(const std::string& path, ParticleData* out = nullptr) {
-    try {
-        ParticleData p = read_particles(path);
-        if (out) *out = std::move(p);
-    } catch (const FormatError& e) {
-        return e.what();
-    }
-    return "";
-}
-
-void require_error(const std::string& path, const std::string& expect) {
-    std::string message = outcome(path);
-    INFO("path: " << path << "\nmessage: " << message);
-    REQUIRE(!message.empty());
-    REQUIRE(message.rfind(path, 0) == 0);
-    REQUIRE_THAT(message, Catch::Contains(expect));
-}
-
-// A successful read must be self-consistent: whole triples, every attribute one tuple per particle.
-void require_consistent(const ParticleData& p) {
-    REQUIRE(p.positions.size() % 3 == 0);
-    for (const auto& a : p.attributes) {
-        REQUIRE(a.components >= 1);
-        REQUIRE(a.values.size() == p.size() * static_cast<std::size_t>(a.components));
-    }
-}
 
 struct SmallFile {
     std::string name;
@@ -118,7 +86,7 @@ TEST_CASE("an empty file is refused in every format", "[bad-input]") {
     for (const char* ext : {".vtk", ".vtu", ".vtp", ".bgeo", ".bgeo.gz", ".ply", ".npy", ".npz", ".csv", ".xyz", ".dat"}) {
         std::string path = dir.file(std::string("frame") + ext);
         write_text(path, "");
-        require_error(path, "empty file");
+        require_particle_error(path, "empty file");
     }
 }
 
@@ -164,42 +132,42 @@ TEST_CASE("header-only files", "[bad-input]") {
     TempDir dir("header");
     std::string path = dir.file("h.vtk");
     write_text(path, "# vtk DataFile Version 4.1\nSPlisHSPlasH particle data\nBINARY\nDATASET UNSTRUCTURED_GRID\n");
-    require_error(path, "no POINTS section");
+    require_particle_error(path, "no POINTS section");
     write_text(path, "# vtk DataFile Version 4.1\nSPlisHSPlasH particle data\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 5 float\n");
-    require_error(path, "POINTS count 5 needs 60 bytes");
+    require_particle_error(path, "POINTS count 5 needs 60 bytes");
 
     path = dir.file("h.vtu");
     write_text(path, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
                      "<UnstructuredGrid>\n");
-    require_error(path, "is not closed");
+    require_particle_error(path, "is not closed");
     write_text(path, "<VTKFile type=\"UnstructuredGrid\"><UnstructuredGrid></UnstructuredGrid></VTKFile>");
-    require_error(path, "no <Piece>");
+    require_particle_error(path, "no <Piece>");
     write_text(path, "<VTKFile type=\"UnstructuredGrid\"><UnstructuredGrid><Piece NumberOfPoints=\"5\"/></UnstructuredGrid></VTKFile>");
-    require_error(path, "has 5 points but no Points DataArray");
+    require_particle_error(path, "has 5 points but no Points DataArray");
 
     path = dir.file("h.bgeo");
     Bytes bgeo = read_bytes(kVariants + "/binary.bgeo");
     write_bytes(path, bgeo.data(), 41 + 2 + 2 + 6 + 4 + 2 + 8 + 6 + 12);  // counts and both attribute definitions
-    require_error(path, "point count 5 (32 bytes per point)");
+    require_particle_error(path, "point count 5 (32 bytes per point)");
 
     path = dir.file("h.ply");
     write_text(path, "ply\nformat binary_little_endian 1.0\nelement vertex 5\nproperty float x\nproperty float y\n"
                      "property float z\nend_header\n");
-    require_error(path, "count 5 needs at least 60 bytes");
+    require_particle_error(path, "count 5 needs at least 60 bytes");
     write_text(path, "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\nend_header\n");
-    require_error(path, "count 5 needs at least 30 bytes");
+    require_particle_error(path, "count 5 needs at least 30 bytes");
     write_text(path, "ply\nformat ascii 1.0\nelement vertex 5\n");
-    require_error(path, "no end_header line");
+    require_particle_error(path, "no end_header line");
 
     path = dir.file("h.npy");
     Bytes npy = read_bytes(kVariants + "/positions.npy");
     write_bytes(path, npy.data(), 128);  // numpy pads the header to 128 bytes
-    require_error(path, "array data of shape (5, 3) and dtype '<f4' needs 60 bytes");
+    require_particle_error(path, "array data of shape (5, 3) and dtype '<f4' needs 60 bytes");
 
     path = dir.file("h.npz");
     Bytes npz = read_bytes(kVariants + "/deflated.npz");
     write_bytes(path, npz.data(), 30 + 13);  // the first local header and its name
-    require_error(path, "end-of-central-directory");
+    require_particle_error(path, "end-of-central-directory");
 
     // A CSV header without rows and a VTK XML file with zero points are empty frames, not errors.
     path = dir.file("h.csv");
@@ -212,11 +180,11 @@ TEST_CASE("counts larger than the file, negative and huge", "[bad-input]") {
     const std::string vtk_head = "# vtk DataFile Version 4.1\nt\nBINARY\nDATASET POLYDATA\n";
     std::string path = dir.file("c.vtk");
     write_text(path, vtk_head + "POINTS 99999999999 float\n" + std::string(64, 'x'));
-    require_error(path, "needs 1199999999988 bytes but the file has only");
+    require_particle_error(path, "needs 1199999999988 bytes but the file has only");
     write_text(path, vtk_head + "POINTS -5 float\n" + std::string(64, 'x'));
-    require_error(path, "bad POINTS count '-5'");
+    require_particle_error(path, "bad POINTS count '-5'");
     write_text(path, vtk_head + "POINTS 18446744073709551615 float\n");
-    require_error(path, "impossibly large");
+    require_particle_error(path, "impossibly large");
 
     path = dir.file("c.vtu");
     const Bytes vtu_bytes = read_bytes(kVariants + "/raw_plain_uint32_le.vtu");
@@ -227,42 +195,42 @@ TEST_CASE("counts larger than the file, negative and huge", "[bad-input]") {
         return s;
     };
     write_text(path, with_points("-5"));
-    require_error(path, "no valid NumberOfPoints ('-5')");
+    require_particle_error(path, "no valid NumberOfPoints ('-5')");
     write_text(path, with_points("18446744073709551615"));
-    require_error(path, "impossibly large");
+    require_particle_error(path, "impossibly large");
     write_text(path, with_points("1000000000"));
-    require_error(path, "holds 60 bytes but 3000000000 values");
+    require_particle_error(path, "holds 60 bytes but 3000000000 values");
     // The byte-count header of the first array says 4 GiB.
     std::string huge = vtu;
     std::size_t data = huge.find("   _") + 4;
     for (int k = 0; k < 4; ++k) huge[data + static_cast<std::size_t>(k)] = '\xff';
     write_text(path, huge);
-    require_error(path, "holds 4294967295 bytes");
+    require_particle_error(path, "holds 4294967295 bytes");
 
     path = dir.file("c.bgeo");
     Bytes bgeo = read_bytes(kVariants + "/binary.bgeo");
     Bytes bad = bgeo;
     bad[9] = 0xff;  // point count -> negative
     write_bytes(path, bad);
-    require_error(path, "negative point count");
+    require_particle_error(path, "negative point count");
     bad = bgeo;
     bad[9] = 0x7f;  // point count -> 2^31 - 251
     write_bytes(path, bad);
-    require_error(path, "a wrong count");
+    require_particle_error(path, "a wrong count");
     bad = bgeo;
     bad[25] = 0x7f;  // attribute count
     write_bytes(path, bad);
-    require_error(path, "point attribute count");
+    require_particle_error(path, "point attribute count");
 
     path = dir.file("c.ply");
     write_text(path, "ply\nformat binary_little_endian 1.0\nelement vertex -5\nproperty float x\nend_header\n");
-    require_error(path, "bad count '-5'");
+    require_particle_error(path, "bad count '-5'");
     write_text(path, "ply\nformat binary_little_endian 1.0\nelement vertex 99999999999999\nproperty float x\nproperty float y\n"
                      "property float z\nend_header\n" + std::string(12, '\0'));
-    require_error(path, "needs at least 1199999999999988 bytes");
+    require_particle_error(path, "needs at least 1199999999999988 bytes");
     write_text(path, "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
                      "property float z\nproperty list uint float extra\nend_header\n" + std::string(12, '\0') + "\xff\xff\xff\xff");
-    require_error(path, "list length 4294967295");
+    require_particle_error(path, "list length 4294967295");
 
     path = dir.file("c.npy");
     Bytes npy = read_bytes(kVariants + "/positions.npy");
@@ -278,18 +246,18 @@ TEST_CASE("counts larger than the file, negative and huge", "[bad-input]") {
         return out;
     };
     write_bytes(path, with_shape("(-5, 3)"));
-    require_error(path, "not a non-negative integer");
+    require_particle_error(path, "not a non-negative integer");
     write_bytes(path, with_shape("(500000000000, 3)"));
-    require_error(path, "needs 6000000000000 bytes but the file has only");
+    require_particle_error(path, "needs 6000000000000 bytes but the file has only");
     write_bytes(path, with_shape("(9223372036854775807, 3)"));
-    require_error(path, "impossibly large");
+    require_particle_error(path, "impossibly large");
     write_bytes(path, with_shape("(99999999999999999999, 3)"));
-    require_error(path, "bad integer");
+    require_particle_error(path, "bad integer");
     Bytes long_header = npy;
     long_header[8] = 0xff;
     long_header[9] = 0xff;  // header length 65535 > the file
     write_bytes(path, long_header);
-    require_error(path, "the .npy header needs 65535 bytes");
+    require_particle_error(path, "the .npy header needs 65535 bytes");
 
     path = dir.file("c.npz");
     Bytes npz = read_bytes(kVariants + "/deflated.npz");
@@ -298,7 +266,7 @@ TEST_CASE("counts larger than the file, negative and huge", "[bad-input]") {
     bad = npz;
     bad[eocd + 10] = bad[eocd + 11] = 0xfe;  // 65278 members
     write_bytes(path, bad);
-    require_error(path, "claims 65278 members");
+    require_particle_error(path, "claims 65278 members");
     // A member whose central directory claims 2 GiB uncompressed: refused before inflating (or allocating).
     std::size_t central = 0;
     for (std::size_t i = 0; i + 4 < npz.size(); ++i)
@@ -313,7 +281,7 @@ TEST_CASE("counts larger than the file, negative and huge", "[bad-input]") {
     bad[central + 26] = 0;
     bad[central + 27] = 0x80;
     write_bytes(path, bad);
-    require_error(path, "refusing a corrupt file or decompression bomb");
+    require_particle_error(path, "refusing a corrupt file or decompression bomb");
 }
 
 TEST_CASE("wrong byte order", "[bad-input]") {
@@ -326,7 +294,7 @@ TEST_CASE("wrong byte order", "[bad-input]") {
         std::swap(raw[i + 1], raw[i + 2]);
     }
     write_bytes(path, raw);
-    require_error(path, "byte-swapped");
+    require_particle_error(path, "byte-swapped");
 
     // VTK XML: the size header read in the wrong order no longer matches the point count.
     path = dir.file("e.vtu");
@@ -334,7 +302,7 @@ TEST_CASE("wrong byte order", "[bad-input]") {
     std::string s(vtu.begin(), vtu.end());
     s.replace(s.find("BigEndian"), 9, "LittleEndian");
     write_text(path, s);
-    require_error(path, "holds 1006632960 bytes");
+    require_particle_error(path, "holds 1006632960 bytes");
 
     // BGEO is always big-endian: a little-endian header gives impossible counts.
     path = dir.file("e.bgeo");
@@ -344,7 +312,7 @@ TEST_CASE("wrong byte order", "[bad-input]") {
         std::swap(bgeo[i + 1], bgeo[i + 2]);
     }
     write_bytes(path, bgeo);
-    require_error(path, "");
+    require_particle_error(path, "");
 
     // PLY and NumPy declare their byte order; data written in the other order than declared reads as other numbers.
     // Documented: the reader cannot know, the values are kept, and the pipeline's own checks (non-finite
@@ -440,10 +408,10 @@ TEST_CASE("a frame too large for memory is refused with the estimate", "[bad-inp
 
 TEST_CASE("directories and missing files", "[bad-input]") {
     TempDir dir("paths");
-    require_error(dir.path.string(), "is a directory");
+    require_particle_error(dir.path.string(), "is a directory");
     fs::create_directory(dir.file("frames.vtu"));
-    require_error(dir.file("frames.vtu"), "is a directory");
-    require_error(dir.file("missing.npz"), "cannot open file: No such file or directory");
+    require_particle_error(dir.file("frames.vtu"), "is a directory");
+    require_particle_error(dir.file("missing.npz"), "cannot open file: No such file or directory");
 }
 
 #ifndef _WIN32  // fifos, permission bits and fork are POSIX
@@ -451,7 +419,7 @@ TEST_CASE("fifos and unreadable files", "[bad-input]") {
     TempDir dir("special");
     std::string fifo = dir.file("pipe.vtk");
     REQUIRE(::mkfifo(fifo.c_str(), 0644) == 0);
-    require_error(fifo, "is not a regular file");  // refused before opening: reading a fifo could block forever
+    require_particle_error(fifo, "is not a regular file");  // refused before opening: reading a fifo could block forever
 
     // chmod 000. Root reads such files anyway (CAP_DAC_OVERRIDE), so as root the check runs in a child process that
     // has dropped to the unprivileged user "nobody"; without either, it is skipped with a warning.
@@ -459,7 +427,7 @@ TEST_CASE("fifos and unreadable files", "[bad-input]") {
     fs::copy_file(kVariants + "/ascii.vtu", locked);
     REQUIRE(::chmod(locked.c_str(), 0) == 0);
     if (::geteuid() != 0) {
-        require_error(locked, "cannot open file: Permission denied");
+        require_particle_error(locked, "cannot open file: Permission denied");
     } else {
         pid_t child = ::fork();
         REQUIRE(child >= 0);

@@ -77,9 +77,10 @@ inline void write_text(const std::string& path, const std::string& text) {
     write_bytes(path, reinterpret_cast<const unsigned char*>(text.data()), text.size());
 }
 
-inline Bytes gzip(const Bytes& data) {
+// Compresses with zlib: window_bits 15 + 16 gives a gzip file, -15 raw deflate data (as in zip archives).
+inline Bytes deflate_bytes(const Bytes& data, int window_bits) {
     z_stream zs{};
-    REQUIRE(deflateInit2(&zs, Z_DEFAULT_COMPRESSION, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) == Z_OK);
+    REQUIRE(deflateInit2(&zs, Z_DEFAULT_COMPRESSION, Z_DEFLATED, window_bits, 8, Z_DEFAULT_STRATEGY) == Z_OK);
     Bytes out(deflateBound(&zs, static_cast<uLong>(data.size())) + 64);
     zs.next_in = const_cast<Bytef*>(data.data());
     zs.avail_in = static_cast<uInt>(data.size());
@@ -90,6 +91,8 @@ inline Bytes gzip(const Bytes& data) {
     deflateEnd(&zs);
     return out;
 }
+
+inline Bytes gzip(const Bytes& data) { return deflate_bytes(data, 15 + 16); }
 
 }  // namespace test
 }  // namespace meniscus

@@ -2,7 +2,7 @@
 #include <catch2/catch.hpp>
 
 #include "post/stray_filter.h"
-#include "post/volume.h"
+#include "mesh/components.h"
 #include "sph/clusters.h"
 #include "surface/reconstruction.h"
 

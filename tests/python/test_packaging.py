@@ -86,7 +86,7 @@ def test_extension_zip_lists_one_wheel_per_blender_python():
     assert 'license = ["SPDX:GPL-3.0-or-later"]' in manifest
     assert re.search(r"^\[permissions\]\nfiles = ", manifest, re.M), "file access must be declared"
     assert "network" not in manifest  # nothing is downloaded at run time
-    assert "__init__.py" in names and "blender/handlers.py" in names and "LICENSE" in names
+    assert "__init__.py" in names and "blender/app_handlers.py" in names and "LICENSE" in names
     assert not any(n.endswith((".so", ".pyd", ".dylib")) for n in names), "compiled code only inside the wheels"
     # The add-on finds the library as the installed wheel (top-level `meniscus`), never by a path of its own.
     init = (ROOT / "addon" / "meniscus" / "__init__.py").read_text()
@@ -102,7 +102,7 @@ def test_legacy_zip_is_one_add_on_folder_with_a_core_per_python():
     cores = sorted(n for n in names if re.fullmatch(r"meniscus/_core\.cpython-3\d+-x86_64-linux-gnu\.so", n))
     assert cores == ["meniscus/_core.cpython-310-x86_64-linux-gnu.so", "meniscus/_core.cpython-311-x86_64-linux-gnu.so"]
     assert any(re.fullmatch(r"meniscus/libgomp-[0-9a-f]+\.so\.1\.0\.0", n) for n in names)
-    assert "meniscus/api.py" in names and "meniscus/blender/handlers.py" in names
+    assert {"meniscus/api.py", "meniscus/parameters.py", "meniscus/blender/app_handlers.py"} <= set(names)
 
 
 @pytest.mark.parametrize("version", ["3.10", "3.11"])

@@ -20,10 +20,13 @@ def test_schema_is_complete_and_consistent():
     names = [p.name for p in parameters.PARAMETERS]
     assert len(names) == len(set(names))
     for p in parameters.PARAMETERS:
-        assert p.type in ("flag", "count", "real") and p.group and p.label and p.cli.startswith("-")
+        assert p.type in ("flag", "count", "real", "vector3") and p.group and p.label and p.cli.startswith("-")
         assert len(p.help) > 20 and p.help[0].isupper(), p.name
         if not p.required:
             assert p.problem(p.default) is None, f"{p.name}: its default {p.default} is not allowed"
+        if p.type == "vector3":
+            assert p.default is None and p.problem((0, 1, 2)) is None and "finite" in p.problem((0, float("nan"), 2))
+            continue
         if p.automatic is not None:
             assert p.problem(p.automatic) is None and p.problem(p.suggested) is None, p.name
         if p.depends_on:
@@ -36,7 +39,8 @@ def test_reconstruct_signature_is_the_schema():
         assert p.name in signature, p.name
         if not p.required:
             assert signature[p.name].default == p.python_default
-            assert type(signature[p.name].default) is {"flag": bool, "count": int, "real": float}[p.type]
+            assert type(signature[p.name].default) is {"flag": bool, "count": int, "real": float,
+                                                       "vector3": type(None)}[p.type]
         assert f"  {p.name}: {p.help}" in meniscus.reconstruct.__doc__
 
 
@@ -91,7 +95,9 @@ def test_command_line_flags_and_defaults_are_the_schema(cli):
     for p in parameters.PARAMETERS:
         entry = _help_entry(help_text, p.cli)
         assert p.help.split(":")[0] in entry, p.name
-        if p.cli_style == "value" and not p.required:
+        if p.type == "vector3":
+            assert entry.startswith(f"{p.cli} X Y Z"), (p.name, entry)
+        elif p.cli_style == "value" and not p.required:
             default = p.automatic_word if p.automatic == p.default else meniscus._core.format_number(p.default)
             assert entry.startswith(f"{p.cli} ") and re.match(r"\S+ \S+=" + re.escape(default) + r"\b", entry), (p.name, entry)
         elif p.cli_style == "on_off":

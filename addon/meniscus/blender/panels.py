@@ -140,7 +140,7 @@ def draw_parameters(layout, settings, group):
     """Every schema parameter of a group, in schema order: greyed out while the parameter it depends on is off, and
     with its Automatic switch where it has one. A parameter added to the schema appears here by itself."""
     for parameter in parameters.PARAMETERS:
-        if parameter.group != group or parameter.name in properties.DRIVEN_BY_ADDON:
+        if parameter.group != group or parameter.name in properties.DRIVEN_BY_ADDON or parameter.type == "vector3":
             continue
         column = layout.column(align=True)
         column.active = not parameter.depends_on or _is_on(settings, parameter.depends_on)
@@ -187,6 +187,12 @@ class MENISCUS_PT_smoothing(_ParameterPanel, bpy.types.Panel):
     group = "smoothing"
 
 
+class MENISCUS_PT_container(_ParameterPanel, bpy.types.Panel):
+    bl_label = "Container"
+    bl_options = {"DEFAULT_CLOSED"}
+    group = "container"
+
+
 class MENISCUS_PT_mesh(_ParameterPanel, bpy.types.Panel):
     bl_label = "Mesh Cleanup"
     bl_options = {"DEFAULT_CLOSED"}
@@ -222,7 +228,7 @@ class MENISCUS_PT_performance(_ParameterPanel, bpy.types.Panel):
 
 
 classes = (MENISCUS_PT_main, MENISCUS_PT_source, MENISCUS_PT_cache, MENISCUS_PT_reconstruction,
-           MENISCUS_PT_smoothing, MENISCUS_PT_mesh, MENISCUS_PT_normals, MENISCUS_PT_attributes,
+           MENISCUS_PT_smoothing, MENISCUS_PT_container, MENISCUS_PT_mesh, MENISCUS_PT_normals, MENISCUS_PT_attributes,
            MENISCUS_PT_performance)
 
 

@@ -229,7 +229,7 @@ def parameter_property(parameter, default=None, name=None, description=None):
 def _add_pipeline_properties(cls):
     """One property per schema parameter (and a <name>_auto switch where it has an automatic value)."""
     for parameter in parameters.PARAMETERS:
-        if parameter.name in DRIVEN_BY_ADDON:
+        if parameter.name in DRIVEN_BY_ADDON or parameter.type == "vector3":
             continue
         cls.__annotations__[parameter.name] = parameter_property(parameter)
         if parameter.automatic is not None:
@@ -253,6 +253,9 @@ def pipeline_arguments(settings, for_render, normals=None):
     arguments = {}
     for parameter in parameters.PARAMETERS:
         if parameter.name in DRIVEN_BY_ADDON:
+            continue
+        if parameter.type == "vector3":  # boxes: from the container object (container.py), unset otherwise
+            arguments[parameter.name] = None
             continue
         value = getattr(settings, parameter.name)
         if parameter.automatic is not None and getattr(settings, parameter.name + "_auto"):

@@ -6,7 +6,8 @@
 #include "base/parallel.h"
 #include "mesh/adjacency.h"
 #include "post/heat_smoothing.h"
-#include "post/volume.h"
+#include "post/smoothing.h"
+#include "mesh/components.h"
 
 namespace meniscus {
 
@@ -14,24 +15,10 @@ namespace {
 
 constexpr int64_t kSumBlock = 8192;
 
-template <class F>
-double block_sum(int64_t n, int threads, F&& term) {
-    const int64_t blocks = (n + kSumBlock - 1) / kSumBlock;
-    std::vector<double> partial(static_cast<std::size_t>(std::max<int64_t>(blocks, 0)), 0.0);
-    parallel_for(blocks, threads, [&](int64_t b) {
-        double s = 0.0;
-        for (int64_t i = b * kSumBlock; i < std::min(n, (b + 1) * kSumBlock); ++i) s += term(i);
-        partial[b] = s;
-    });
-    double total = 0.0;
-    for (double p : partial) total += p;
-    return total;
-}
-
 double mean_distance(const TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& other, int threads) {
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
-    const double used = block_sum(nv, threads, [&](int64_t v) { return adjacency.valence(v) > 0 ? 1.0 : 0.0; });
-    const double total = block_sum(nv, threads, [&](int64_t v) {
+    const double used = ordered_block_sum(nv, threads, kSumBlock, [&](int64_t v) { return adjacency.valence(v) > 0 ? 1.0 : 0.0; });
+    const double total = ordered_block_sum(nv, threads, kSumBlock, [&](int64_t v) {
         if (adjacency.valence(v) == 0) return 0.0;
         double d2 = 0.0;
         for (int k = 0; k < 3; ++k) {
@@ -96,8 +83,8 @@ double mean_edge_length(const TriMesh& mesh, const MeshAdjacency& adjacency, int
         }
         return s;
     };
-    const double count = block_sum(nv, threads, [&](int64_t v) { return edges_from(v, false); });
-    const double total = block_sum(nv, threads, [&](int64_t v) { return edges_from(v, true); });
+    const double count = ordered_block_sum(nv, threads, kSumBlock, [&](int64_t v) { return edges_from(v, false); });
+    const double total = ordered_block_sum(nv, threads, kSumBlock, [&](int64_t v) { return edges_from(v, true); });
     return count > 0.0 ? total / count : 0.0;
 }
 

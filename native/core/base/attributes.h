@@ -17,6 +17,14 @@ struct Attribute {
     std::size_t count() const { return components > 0 ? values.size() / static_cast<std::size_t>(components) : 0; }
 };
 
+// A per-element attribute given by the caller, read in place: values[i * components + k].
+struct AttributeInput {
+    std::string name;
+    const float* values = nullptr;
+    int components = 1;
+    bool integral = false;  // whole numbers (ids, labels): the nearest particle's value, not an average
+};
+
 // Finds an attribute by name; nullptr when absent.
 template <class Container>
 auto find_attribute(Container& attributes, const std::string& name) -> decltype(&attributes[0]) {

@@ -24,10 +24,12 @@ ParticleData read_particles(const std::string& path);
 // Writes a mesh; the format follows the extension: .ply (binary little-endian, with normals and every vertex
 // attribute), .obj (with normals), .vtk (legacy, binary, POLYDATA with normals and attributes as point data).
 // PLY attribute properties: NAME for 1 component, NAME_x NAME_y NAME_z for 3, NAME_0 .. NAME_{k-1} otherwise (details
-// in io_mesh.cpp). An invalid mesh or an unknown extension is an InputError; a failed write a FormatError.
+// in formats/ply.cpp). An invalid mesh or an unknown extension is an InputError; a failed write a FormatError.
 void write_mesh(const TriMesh& mesh, const std::string& path);
 
-// Reads a triangle mesh written by write_mesh (PLY binary/ASCII or OBJ), with normals and attributes where present.
+// Reads a triangle mesh such as write_mesh writes (PLY binary/ASCII, OBJ, legacy VTK POLYDATA binary/ASCII; chosen by
+// the 'ply' or '# vtk DataFile' header, else by the extension), with normals and attributes where present; polygons
+// are fanned into triangles.
 TriMesh read_mesh(const std::string& path);
 
 }  // namespace meniscus

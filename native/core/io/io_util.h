@@ -52,8 +52,8 @@ struct Source {
     bool decompressed = false;  // byte offsets in messages then refer to the decompressed data
 };
 
-// The particle readers, one per format (io_vtk.cpp, io_bgeo.cpp, io_vtu.cpp, io_mesh.cpp, io_numpy.cpp,
-// io_text.cpp, io_houdini.cpp). Each takes the whole (decompressed) file and throws FormatError on anything it cannot read.
+// The particle readers, one per format (formats/vtk.cpp, bgeo.cpp, vtu.cpp, ply.cpp, numpy.cpp, text.cpp,
+// houdini.cpp). Each takes the whole (decompressed) file and throws FormatError on anything it cannot read.
 ParticleData read_vtk_particles(const Source& source);
 ParticleData read_bgeo_particles(const Source& source);
 ParticleData read_vtu_particles(const Source& source);    // VTK XML: .vtu (UnstructuredGrid), .vtp (PolyData)
@@ -63,6 +63,11 @@ ParticleData read_npz_particles(const Source& source);    // NumPy .npz: a zip o
 ParticleData read_csv_particles(const Source& source);    // delimited text with a header naming x, y, z
 ParticleData read_xyz_particles(const Source& source);    // raw little-endian float32 triples, or x y z text lines
 ParticleData read_houdini_json_particles(const Source& source);  // Houdini 12+ JSON geometry: ASCII .geo, binary .bgeo
+
+// The mesh readers (formats/ply.cpp, obj.cpp, vtk.cpp), the same way.
+TriMesh read_ply_mesh(const Source& source);
+TriMesh read_obj_mesh(const Source& source);
+TriMesh read_vtk_mesh(const Source& source);  // legacy VTK POLYDATA with POLYGONS
 
 // Format detection and dispatch on bytes already in memory (gzip is undone first); `path` names the file in
 // messages and its extension decides where the content has no magic. read_particles(path) is read_file + this; the
@@ -221,6 +226,23 @@ inline std::size_t scalar_size(ScalarType t) {
 
 inline bool scalar_is_integer(ScalarType t) { return t != ScalarType::f32 && t != ScalarType::f64; }
 
+// One spelling of a scalar type in a format's headers ("float", "Float32", "uchar", "vtktypeint64").
+struct ScalarTypeName {
+    const char* name;
+    ScalarType type;
+};
+
+// Looks `name` up in a format's table of type names (ignoring case where the format does); false when absent.
+template <std::size_t N>
+bool find_scalar_type(const ScalarTypeName (&table)[N], std::string_view name, bool ignore_case, ScalarType& type) {
+    for (const auto& entry : table)
+        if (ignore_case ? iequals(name, entry.name) : name == entry.name) {
+            type = entry.type;
+            return true;
+        }
+    return false;
+}
+
 // Decodes one binary value of type t at p (which must hold scalar_size(t) bytes) as a double.
 inline double decode_scalar(const unsigned char* p, ScalarType t, bool big_endian) {
     switch (t) {
@@ -344,6 +366,11 @@ public:
 private:
     Source src_;
     std::size_t pos_ = 0;
+};
+
+// A run of bytes [begin, end) of a source, such as the character data of an XML element.
+struct TextRange {
+    std::size_t begin = 0, end = 0;
 };
 
 // Splits a line into whitespace-separated tokens, at most max_tokens of them (keyword lines need a handful; the

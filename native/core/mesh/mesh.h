@@ -3,6 +3,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "base/attributes.h"
@@ -22,5 +23,18 @@ struct TriMesh {
     std::size_t num_triangles() const { return triangles.size() / 3; }
     std::size_t num_quads() const { return quads.size() / 4; }
 };
+
+// Triangle t (3 vertex indices) uses one vertex twice: it has no area and no well-defined edges.
+inline bool has_repeated_index(const int32_t* t) { return t[0] == t[1] || t[1] == t[2] || t[2] == t[0]; }
+// The corner (0, 1 or 2) at which triangle t uses vertex v, which it must contain.
+inline int corner_of(const int32_t* t, int32_t v) { return t[0] == v ? 0 : t[1] == v ? 1 : 2; }
+
+// Throws InputError (naming `where`) when array sizes are not multiples of 3, an index is out of range, normals
+// are neither empty nor one per vertex, or an attribute does not hold one value tuple per vertex. Every public
+// mesh algorithm calls it before touching the arrays.
+void validate_mesh_arrays(const TriMesh& mesh, const std::string& where);
+
+// Index of the first value that is NaN or infinite, or values.size() when all are finite.
+std::size_t first_non_finite(const std::vector<float>& values);
 
 }  // namespace meniscus

@@ -1,31 +1,18 @@
-// check_mesh: the consistency report every post-processing stage is tested against (closed, 2-manifold,
-// consistently oriented, no degenerate triangles, finite coordinates).
+#include "mesh/topology.h"
+
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <string>
 #include <vector>
 
+#include "base/disjoint_sets.h"
+#include "base/parallel.h"
 #include "mesh/adjacency.h"
-#include "post/postprocess.h"
+#include "mesh/geometry.h"
 
 namespace meniscus {
 
-namespace {
-
-bool has_repeated_index(const int32_t* t) { return t[0] == t[1] || t[1] == t[2] || t[2] == t[0]; }
-
-}  // namespace
-
-bool triangle_has_zero_area(const float* v, const int32_t* t) {
-    const float* a = v + 3 * static_cast<int64_t>(t[0]);
-    const float* b = v + 3 * static_cast<int64_t>(t[1]);
-    const float* c = v + 3 * static_cast<int64_t>(t[2]);
-    const double e1[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
-    const double e2[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
-    const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-    return n[0] == 0.0 && n[1] == 0.0 && n[2] == 0.0;
-}
+bool triangle_has_zero_area(const float* vertices, const int32_t* triangle) { return is_zero(triangle_cross(vertices, triangle)); }
 
 namespace {
 
@@ -33,14 +20,10 @@ namespace {
 // single cycle, or a single path at a boundary: every link vertex has at most two link edges and the link graph
 // is connected. A bow-tie (two fans meeting at v) has two components.
 struct VertexScratch {
-    std::vector<int32_t> link_vertices, degree, parent;
+    std::vector<int32_t> link_vertices, degree;
+    DisjointSets link_components;
     std::vector<EdgeIncidence> edges;
 };
-
-int32_t find_root(std::vector<int32_t>& parent, int32_t i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-}
 
 bool fan_is_single_disk(const TriMesh& mesh, const CsrList& vt, int32_t v, VertexScratch& s) {
     const int32_t* tris = mesh.triangles.data();
@@ -57,20 +40,14 @@ bool fan_is_single_disk(const TriMesh& mesh, const CsrList& vt, int32_t v, Verte
         return static_cast<int32_t>(std::lower_bound(s.link_vertices.begin(), s.link_vertices.end(), u) - s.link_vertices.begin());
     };
     s.degree.assign(static_cast<std::size_t>(n), 0);
-    s.parent.resize(static_cast<std::size_t>(n));
-    for (int32_t i = 0; i < n; ++i) s.parent[i] = i;
+    s.link_components.reset(static_cast<std::size_t>(n));
     int32_t components = n;
     for (int64_t k = vt.begin(v); k < vt.end(v); ++k) {
         const int32_t* t = tris + 3 * static_cast<int64_t>(vt.items[k]);
-        int corner = 0;
-        while (t[corner] != v) ++corner;
+        const int corner = corner_of(t, v);
         const int32_t a = local(t[(corner + 1) % 3]), b = local(t[(corner + 2) % 3]);
         if (++s.degree[a] > 2 || ++s.degree[b] > 2) return false;
-        const int32_t ra = find_root(s.parent, a), rb = find_root(s.parent, b);
-        if (ra != rb) {
-            s.parent[ra] = rb;
-            --components;
-        }
+        if (s.link_components.unite(a, b)) --components;
     }
     return components == 1;
 }
@@ -97,84 +74,105 @@ std::string MeshCheck::summary() const {
     return text;
 }
 
+namespace {
+
+// What the pass over the vertices finds: each undirected edge is examined at its smaller vertex (triangle count
+// and traversal directions), each vertex's fan is checked for being a single disk.
+struct FanAndEdgeCounts {
+    std::size_t boundary_edges = 0, non_manifold_edges = 0, inconsistent_edges = 0, non_manifold_vertices = 0,
+                unreferenced_vertices = 0;
+};
+
+FanAndEdgeCounts count_fan_and_edge_problems(const TriMesh& mesh, const CsrList& vt, int threads) {
+    constexpr int64_t kBlock = 4096;
+    return ordered_block_reduce(
+        static_cast<int64_t>(mesh.num_vertices()), threads, kBlock, FanAndEdgeCounts{},
+        [&](int64_t begin, int64_t end, FanAndEdgeCounts& c) {
+            VertexScratch s;
+            for (int64_t v = begin; v < end; ++v) {
+                if (vt.size(v) == 0) {
+                    ++c.unreferenced_vertices;
+                    continue;
+                }
+                if (!fan_is_single_disk(mesh, vt, static_cast<int32_t>(v), s)) ++c.non_manifold_vertices;
+                upper_edge_incidences(mesh, vt, static_cast<int32_t>(v), s.edges);
+                for_each_edge(s.edges, [&](const EdgeIncidence* first, const EdgeIncidence* last) {
+                    int32_t direction = 0;
+                    for (const EdgeIncidence* e = first; e != last; ++e) direction += e->direction;
+                    if (last - first == 1) ++c.boundary_edges;
+                    else if (last - first > 2) ++c.non_manifold_edges;
+                    else if (direction != 0) ++c.inconsistent_edges;  // consistent: one runs v -> u, the other u -> v
+                });
+            }
+        },
+        [](FanAndEdgeCounts& total, const FanAndEdgeCounts& c) {
+            total.boundary_edges += c.boundary_edges;
+            total.non_manifold_edges += c.non_manifold_edges;
+            total.inconsistent_edges += c.inconsistent_edges;
+            total.non_manifold_vertices += c.non_manifold_vertices;
+            total.unreferenced_vertices += c.unreferenced_vertices;
+        });
+}
+
+TriMesh without_repeated_index_triangles(const TriMesh& mesh) {
+    TriMesh filtered;
+    filtered.vertices = mesh.vertices;
+    filtered.triangles.reserve(mesh.triangles.size());
+    for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
+        const int32_t* c = &mesh.triangles[3 * t];
+        if (!has_repeated_index(c)) filtered.triangles.insert(filtered.triangles.end(), c, c + 3);
+    }
+    return filtered;
+}
+
+std::size_t count_unreferenced_vertices(const TriMesh& mesh) {
+    std::vector<uint8_t> used(mesh.num_vertices(), 0);
+    for (int32_t v : mesh.triangles) used[v] = 1;
+    return static_cast<std::size_t>(std::count(used.begin(), used.end(), uint8_t(0)));
+}
+
+}  // namespace
+
 MeshCheck check_mesh(const TriMesh& mesh) {
     validate_mesh_arrays(mesh, "check_mesh");
     const int threads = 0;
-    MeshCheck check;
-    const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
-    const int64_t nt = static_cast<int64_t>(mesh.num_triangles());
     const int32_t* tris = mesh.triangles.data();
-
-    // Triangles with a repeated index have no well-defined edges or fan position: count them as degenerate and
-    // leave them out of the topology (a copy without them is made only when there are any).
-    std::size_t repeated = 0, zero = 0, non_finite = 0;
-#pragma omp parallel for reduction(+ : repeated, zero) schedule(static) num_threads(resolve_threads(threads))
-    for (int64_t t = 0; t < nt; ++t) {
-        if (has_repeated_index(tris + 3 * t)) ++repeated;
-        else if (triangle_has_zero_area(mesh.vertices.data(), tris + 3 * t)) ++zero;
-    }
-#pragma omp parallel for reduction(+ : non_finite) schedule(static) num_threads(resolve_threads(threads))
-    for (int64_t v = 0; v < nv; ++v)
-        if (!std::isfinite(mesh.vertices[3 * v]) || !std::isfinite(mesh.vertices[3 * v + 1]) ||
-            !std::isfinite(mesh.vertices[3 * v + 2]))
-            ++non_finite;
-    check.degenerate_triangles = repeated + zero;
-    check.non_finite_vertices = non_finite;
-
-    TriMesh filtered;
-    const TriMesh* topo = &mesh;
-    if (repeated > 0) {
-        filtered.vertices = mesh.vertices;
-        filtered.triangles.reserve(mesh.triangles.size());
-        for (int64_t t = 0; t < nt; ++t)
-            if (!has_repeated_index(tris + 3 * t)) filtered.triangles.insert(filtered.triangles.end(), tris + 3 * t, tris + 3 * t + 3);
-        topo = &filtered;
-    }
-    const CsrList vt = build_vertex_triangles(*topo, threads);
-
-    // One pass over the vertices: each undirected edge is examined at its smaller vertex (triangle count and
-    // traversal directions), each vertex's fan is checked for being a single disk.
-    constexpr int64_t kBlock = 4096;
-    const int64_t blocks = (nv + kBlock - 1) / kBlock;
-    std::vector<std::array<std::size_t, 5>> partial(static_cast<std::size_t>(blocks));
-    parallel_for(blocks, threads, [&](int64_t b) {
-        VertexScratch s;
-        std::array<std::size_t, 5> c{};  // boundary, non-manifold edges, inconsistent, non-manifold vertices, unreferenced
-        for (int64_t v = b * kBlock; v < std::min(nv, (b + 1) * kBlock); ++v) {
-            if (vt.size(v) == 0) {
-                ++c[4];
-                continue;
+    const float* vertices = mesh.vertices.data();
+    MeshCheck check;
+    // One pass: a repeated index or else exactly zero area (the first is needed on its own below).
+    struct Degenerate {
+        std::size_t repeated_index = 0, zero_area = 0;
+    };
+    constexpr int64_t kTriangleBlock = 1 << 16;
+    const Degenerate degenerate = ordered_block_reduce(
+        static_cast<int64_t>(mesh.num_triangles()), threads, kTriangleBlock, Degenerate{},
+        [&](int64_t begin, int64_t end, Degenerate& d) {
+            for (int64_t t = begin; t < end; ++t) {
+                if (has_repeated_index(tris + 3 * t)) ++d.repeated_index;
+                else if (triangle_has_zero_area(vertices, tris + 3 * t)) ++d.zero_area;
             }
-            if (!fan_is_single_disk(*topo, vt, static_cast<int32_t>(v), s)) ++c[3];
-            upper_edge_incidences(*topo, vt, static_cast<int32_t>(v), s.edges);
-            for (std::size_t i = 0; i < s.edges.size();) {
-                std::size_t j = i;
-                int32_t direction = 0;
-                for (; j < s.edges.size() && s.edges[j].other == s.edges[i].other; ++j) direction += s.edges[j].direction;
-                const std::size_t count = j - i;
-                if (count == 1) ++c[0];
-                else if (count > 2) ++c[1];
-                else if (direction != 0) ++c[2];  // consistent: one triangle runs v -> u, the other u -> v
-                i = j;
-            }
-        }
-        partial[b] = c;
+        },
+        [](Degenerate& total, const Degenerate& d) {
+            total.repeated_index += d.repeated_index;
+            total.zero_area += d.zero_area;
+        });
+    const std::size_t repeated = degenerate.repeated_index;
+    check.degenerate_triangles = degenerate.repeated_index + degenerate.zero_area;
+    check.non_finite_vertices = parallel_count(static_cast<int64_t>(mesh.num_vertices()), threads, [&](int64_t v) {
+        return !std::isfinite(vertices[3 * v]) || !std::isfinite(vertices[3 * v + 1]) || !std::isfinite(vertices[3 * v + 2]);
     });
-    std::size_t unreferenced = 0;
-    for (const auto& c : partial) {
-        check.boundary_edges += c[0];
-        check.non_manifold_edges += c[1];
-        check.inconsistent_edges += c[2];
-        check.non_manifold_vertices += c[3];
-        unreferenced += c[4];
-    }
-    if (repeated > 0) {  // a vertex used only by triangles with a repeated index still counts as referenced
-        std::vector<uint8_t> used(static_cast<std::size_t>(nv), 0);
-        for (std::size_t i = 0; i < mesh.triangles.size(); ++i) used[tris[i]] = 1;
-        unreferenced = 0;
-        for (int64_t v = 0; v < nv; ++v) unreferenced += used[v] ? 0 : 1;
-    }
-    check.unreferenced_vertices = unreferenced;
+
+    // Triangles with a repeated index have no well-defined edges or fan position: counted as degenerate above and
+    // left out of the topology (a copy without them is made only when there are any).
+    const TriMesh filtered = repeated > 0 ? without_repeated_index_triangles(mesh) : TriMesh{};
+    const TriMesh& topology = repeated > 0 ? filtered : mesh;
+    const FanAndEdgeCounts counts = count_fan_and_edge_problems(topology, build_vertex_triangles(topology, threads), threads);
+    check.boundary_edges = counts.boundary_edges;
+    check.non_manifold_edges = counts.non_manifold_edges;
+    check.inconsistent_edges = counts.inconsistent_edges;
+    check.non_manifold_vertices = counts.non_manifold_vertices;
+    // A vertex used only by triangles with a repeated index still counts as referenced.
+    check.unreferenced_vertices = repeated > 0 ? count_unreferenced_vertices(mesh) : counts.unreferenced_vertices;
     return check;
 }
 

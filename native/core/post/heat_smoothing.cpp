@@ -9,7 +9,8 @@
 #include "base/numbers.h"
 #include "base/parallel.h"
 #include "mesh/adjacency.h"
-#include "post/postprocess.h"
+#include "mesh/components.h"
+#include "post/normals.h"
 #include "post/volume.h"
 #include "post/wall_constraints.h"
 
@@ -26,14 +27,6 @@ double seconds_since(std::chrono::steady_clock::time_point& mark) {
     return s;
 }
 
-// body(begin, end) over consecutive blocks of [0, n): fixed blocks, so per-block sums do not depend on the threads.
-template <class F>
-void for_blocks(int64_t n, int threads, int64_t block, F&& body) {
-    if (n <= 0) return;
-    const int64_t blocks = (n + block - 1) / block;
-    parallel_for(blocks, threads, [&](int64_t b) { body(b * block, std::min(n, (b + 1) * block)); });
-}
-
 // One Chebyshev term: t_out = 2 Y t_in - t_older (the first: t_out = Y t_in), written over t_older (read first).
 // Y = I + w (mean - I) per vertex; coordinates set in `frozen` are left as they are (y = t_in). With ACC the two
 // newest terms go into the sum at once, acc += c_in t_in + c_out t_out (t_in is loaded for the stencil anyway): the
@@ -42,7 +35,7 @@ template <int D, bool FIRST, bool FROZEN, bool ACC>
 void chebyshev_term(const CsrList& nb, const float* w, const uint8_t* frozen, const float* in, float* older_out, float* acc,
                     float c_in, float c_out, int threads) {
     const int64_t nv = static_cast<int64_t>(nb.rows());
-    for_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t i = begin; i < end; ++i) {
             const int32_t* row = nb.row(i);
             const int32_t m = nb.size(i);
@@ -92,7 +85,7 @@ int chebyshev_apply(std::vector<float>& x, const CsrList& nb, const float* w, co
     }
     std::vector<float> older(x.size()), current(x.size()), acc(x.size());
     const float c0 = static_cast<float>(c[0]);
-    for_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t i = begin; i < end; ++i)
             for (int d = 0; d < D; ++d) {
                 const float t = x[D * i + d] - centre[d];
@@ -109,36 +102,13 @@ int chebyshev_apply(std::vector<float>& x, const CsrList& nb, const float* w, co
                                          even ? coefficient(k - 1) : 0.0f, coefficient(k), threads);
         older.swap(current);
     }
-    for_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t i = begin; i < end; ++i) {
             if (nb.size(i) == 0 || (w && w[i] == 0.0f)) continue;  // not moved: keeps its bits
             for (int d = 0; d < D; ++d) x[D * i + d] = centre[d] + acc[D * i + d];
         }
     });
     return degree;
-}
-
-// Per-component sums of value(t) over the triangles (a triangle counts for its first corner's component), in fixed
-// blocks added in order: the same bits for any thread count.
-template <class Value>
-std::vector<double> per_component_sum(const TriMesh& mesh, const std::vector<int32_t>& labels, int32_t count, int threads,
-                                      const Value& value) {
-    const int64_t nt = static_cast<int64_t>(mesh.num_triangles());
-    constexpr int64_t block = int64_t(1) << 16;
-    std::vector<double> total(static_cast<std::size_t>(count), 0.0);
-    const int64_t blocks = (nt + block - 1) / block;
-    if (blocks <= 1 || blocks * count > (int64_t(1) << 22)) {
-        for (int64_t t = 0; t < nt; ++t) total[labels[mesh.triangles[3 * t]]] += value(t);
-        return total;
-    }
-    std::vector<double> partial(static_cast<std::size_t>(blocks * count), 0.0);
-    parallel_for(blocks, threads, [&](int64_t b) {
-        double* row = partial.data() + b * count;
-        for (int64_t t = b * block; t < std::min(nt, (b + 1) * block); ++t) row[labels[mesh.triangles[3 * t]]] += value(t);
-    });
-    for (int64_t b = 0; b < blocks; ++b)
-        for (int32_t k = 0; k < count; ++k) total[k] += partial[b * count + k];
-    return total;
 }
 
 void apply_walls(const WallConstraints* walls, TriMesh& mesh) {
@@ -159,7 +129,7 @@ void correct_component_volumes(TriMesh& mesh, const std::vector<int32_t>& labels
         for (int32_t c = 0; c < count && converged; ++c) converged = std::fabs(target[c] - volume[c]) <= 1e-5 * std::fabs(target[c]);
         if (converged) break;
         // d volume / d s = sum_i amount_i A_i (A_i a third of the incident triangles' areas).
-        const std::vector<double> rate = per_component_sum(mesh, labels, count, threads, [&](int64_t t) {
+        const std::vector<double> rate = sum_per_component(mesh, labels, count, threads, [&](int64_t t) {
             const int32_t* tri = tris + 3 * t;
             const float *a = &mesh.vertices[3 * static_cast<std::size_t>(tri[0])], *b = &mesh.vertices[3 * static_cast<std::size_t>(tri[1])],
                         *c = &mesh.vertices[3 * static_cast<std::size_t>(tri[2])];
@@ -183,7 +153,7 @@ void correct_component_volumes(TriMesh& mesh, const std::vector<int32_t>& labels
             any = any || s != 0.0;
         }
         if (!any) break;
-        for_blocks(static_cast<int64_t>(mesh.num_vertices()), threads, kBlock, [&](int64_t begin, int64_t end) {
+        parallel_blocks(static_cast<int64_t>(mesh.num_vertices()), threads, kBlock, [&](int64_t begin, int64_t end) {
             for (int64_t v = begin; v < end; ++v) {
                 const double s = offset[labels[v]] * (amount.empty() ? 1.0 : double(amount[v]));
                 if (s == 0.0) continue;
@@ -203,7 +173,7 @@ void normals_and_areas(const TriMesh& mesh, const MeshAdjacency& adjacency, std:
     const CsrList& vt = adjacency.vertex_triangles;
     normals.resize(mesh.vertices.size());
     areas.resize(static_cast<std::size_t>(nv));
-    for_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t v = begin; v < end; ++v) {
             double sum[3] = {0.0, 0.0, 0.0}, largest[3] = {0.0, 0.0, 1.0}, largest_norm = 0.0, area = 0.0;
             for (int64_t k = vt.begin(v); k < vt.end(v); ++k) {
@@ -251,7 +221,7 @@ bool grid_average(const std::vector<float>& positions, const std::vector<float>&
     // Per vertex: base node and fractions.
     std::vector<int32_t> base(3 * static_cast<std::size_t>(nv));
     std::vector<float> frac(3 * static_cast<std::size_t>(nv));
-    for_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t i = begin; i < end; ++i)
             for (int k = 0; k < 3; ++k) {
                 const double u = (double(positions[3 * i + k]) - lo[k]) / h;
@@ -322,7 +292,7 @@ bool grid_average(const std::vector<float>& positions, const std::vector<float>&
             field->swap(scratch);
         }
     }
-    for_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t i = begin; i < end; ++i) {
             const int64_t bx = base[3 * i], by = base[3 * i + 1], bz = base[3 * i + 2];
             const double fx = frac[3 * i], fy = frac[3 * i + 1], fz = frac[3 * i + 2];
@@ -415,7 +385,7 @@ int heat_filter(std::vector<float>& x, int dims, const MeshAdjacency& adjacency,
 }
 
 HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& weights_in,
-                                const HeatSmoothingSettings& settings, int threads) {
+                                const HeatSmoothingSettings& settings, const UnsmoothedSurface& unsmoothed, int threads) {
     validate_mesh_arrays(mesh, "heat_smooth");
     HeatSmoothingReport report;
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
@@ -453,20 +423,9 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     report.parts = settings.parts > 0 ? settings.parts
                                       : std::max(1, static_cast<int>(std::ceil(time / (kPartTime * radius * radius) - 0.05)));
 
-    // Components: for the exact final volume and for the guard against collapsed blobs (a few vertices around one
-    // grid point that a plain flow would pull into a point). Not needed when neither applies.
     auto mark = std::chrono::steady_clock::now();
-    const bool guard = settings.volume_correction || weights.empty();
-    int32_t components = 0;
-    std::vector<int32_t> labels;
-    std::vector<double> volumes;
-    std::vector<float> start;
-    if (guard) {
-        labels = component_labels(mesh, &components);
-        volumes = component_volumes(mesh, labels, components, threads);
-        start = mesh.vertices;
-    }
-    report.seconds_components += seconds_since(mark);
+    if (settings.volume_correction && unsmoothed.labels.size() != mesh.num_vertices())
+        throw InputError("heat_smooth: the unsmoothed surface does not belong to this mesh");
 
     const double local_scale = (settings.local_scale > 0.0 ? settings.local_scale : kLocalScale) * radius;
     const double return_iterations = std::pow(local_scale / report.edge, 2.0);
@@ -482,7 +441,7 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
         // The part's normal displacement, low-passed over the surface, goes back along the normals.
         normals_and_areas(mesh, adjacency, normals, areas, threads);  // of a smoothed surface: smooth enough as they are
         if (part == 0 || !settings.reuse_return) {
-            for_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+            parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
                 for (int64_t i = begin; i < end; ++i) {
                     float d = 0.0f;
                     for (int k = 0; k < 3; ++k) d += (mesh.vertices[3 * i + k] - before[3 * i + k]) * normals[3 * i + k];
@@ -493,7 +452,7 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
                 report.applications += heat_filter(offset, 1, adjacency, {}, return_iterations,
                                                    settings.return_tolerance > 0.0 ? settings.return_tolerance : kReturnTolerance, threads);
         }
-        for_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
             for (int64_t i = begin; i < end; ++i) {
                 const float back = offset[i];
                 if (back == 0.0f) continue;
@@ -507,17 +466,24 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     if (settings.volume_correction) {
         // Along smoothed normals (offsets along raw vertex normals would print the triangulation's noise back in);
         // the offsets are tiny, so these normals are the output's normals too.
-        compute_area_weighted_normals(mesh, adjacency, threads);
-        smooth_normals(mesh, adjacency, settings.normal_iterations, threads);
-        report.normals_left = true;
-        correct_component_volumes(mesh, labels, volumes, weights, settings.max_offset > 0.0 ? settings.max_offset : 4.0 * radius, walls,
-                                  threads);
-    }
-    if (guard) {
-        report.reverted_components = revert_collapsed_components(mesh, start, labels, components, volumes, threads);
-        if (report.reverted_components) report.normals_left = false;
+        mesh.normals = area_weighted_normals(mesh, adjacency.vertex_triangles, threads);
+        smooth_normals(mesh.normals, adjacency.vertex_neighbours, settings.normal_iterations, threads);
+        correct_component_volumes(mesh, unsmoothed.labels, unsmoothed.volumes, weights,
+                                  settings.max_offset > 0.0 ? settings.max_offset : 4.0 * radius, walls, threads);
+        report.normals.values = std::move(mesh.normals);
+        report.normals.iterations = settings.normal_iterations;
+        mesh.normals.clear();
     }
     report.seconds_correction += seconds_since(mark);
+    return report;
+}
+
+HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& weights,
+                                const HeatSmoothingSettings& settings, int threads) {
+    const UnsmoothedSurface unsmoothed = record_unsmoothed_surface(mesh, threads);
+    HeatSmoothingReport report = heat_smooth(mesh, adjacency, weights, settings, unsmoothed, threads);
+    report.reverted_components = revert_collapsed_components(mesh, unsmoothed, threads);
+    if (report.reverted_components) report.normals = SmoothedNormals{};
     return report;
 }
 

@@ -26,11 +26,13 @@
 #include <vector>
 
 #include "mesh/mesh.h"
+#include "post/normals.h"
 
 namespace meniscus {
 
 struct MeshAdjacency;
 struct WallConstraints;
+struct UnsmoothedSurface;
 
 // RMS edge length of a decimated marching-cubes mesh per cube edge (1.05-1.09 on the shared frames at c = 0.25-1.0):
 // turns an iteration count into the reach it has at a cube size.
@@ -79,7 +81,7 @@ struct HeatSmoothingSettings {
     double particle_radius = 0.0;   // r: the unit of the part time and the local scale
     bool local_return = true;       // return the low-passed normal displacement after each part
     bool volume_correction = true;  // final exact per-component volume (Newton along the smoothed normals)
-    int normal_iterations = 10;     // smoothing of the correction's normals (Eq. 12); they are left in mesh.normals
+    int normal_iterations = 10;     // smoothing of the correction's normals (Eq. 12); returned in the report
     double max_offset = 0.0;        // cap of the correction's offset (absolute; 0: 4 r)
     int parts = 0;                  // 0: automatic (heat time <= kPartTime r^2 each)
     // Research knobs (bench/smoothing_scale.py variants; the pipeline leaves them as they are):
@@ -98,13 +100,19 @@ struct HeatSmoothingReport {
     double iterations = 0.0;          // equivalent explicit iterations N
     int parts = 0;
     int applications = 0;             // operator applications (position flow and returned displacement)
-    bool normals_left = false;        // mesh.normals hold the correction's smoothed normals (output-ready)
-    std::size_t reverted_components = 0;  // collapsed components given their positions back (guard)
+    SmoothedNormals normals;          // the final correction's smoothed normals (empty without it): output-ready
+    std::size_t reverted_components = 0;  // collapsed components given their positions back (the whole stage only)
     // Seconds spent: components (labels, volumes), flow, local return (normals, low-pass, move), final correction.
     double seconds_components = 0.0, seconds_flow = 0.0, seconds_return = 0.0, seconds_correction = 0.0;
 };
 
-// The whole stage. weights may be empty (plain heat flow).
+// The flow and the final correction towards the volumes of `unsmoothed` (record_unsmoothed_surface of this mesh,
+// post/volume.h; only read with volume_correction). weights may be empty (plain heat flow). The pipeline runs the
+// collapse guard after it, as after every smoothing.
+HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& weights,
+                                const HeatSmoothingSettings& settings, const UnsmoothedSurface& unsmoothed, int threads);
+// The whole stage on a mesh alone: records the unsmoothed surface, smooths, then the collapse guard
+// (revert_collapsed_components).
 HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& weights,
                                 const HeatSmoothingSettings& settings, int threads);
 

@@ -1,11 +1,11 @@
-// Vertex normals (paper Sec. 3.4): area-weighted face normals, then optional smoothing by Eq. 12.
+#include "post/normals.h"
+
 #include <cmath>
 #include <string>
-#include <vector>
 
 #include "base/errors.h"
-#include "mesh/adjacency.h"
-#include "post/postprocess.h"
+#include "base/parallel.h"
+#include "mesh/geometry.h"
 
 namespace meniscus {
 
@@ -17,83 +17,50 @@ constexpr int64_t kBlock = 4096;
 // than zero so that renderers normalising it never divide by zero.
 constexpr float kFallback[3] = {0.0f, 0.0f, 1.0f};
 
-void face_cross(const float* v, const int32_t* t, double n[3]) {
-    const float* a = v + 3 * static_cast<int64_t>(t[0]);
-    const float* b = v + 3 * static_cast<int64_t>(t[1]);
-    const float* c = v + 3 * static_cast<int64_t>(t[2]);
-    const double e1[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
-    const double e2[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
-    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
-    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
-    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
-}
-
-bool normalise_into(const double n[3], float* out) {
-    const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+bool normalise_into(Vec3d n, float* out) {
+    const double length = std::sqrt(dot(n, n));
     if (!(length > 0.0) || !std::isfinite(length)) return false;
     const double inverse = 1.0 / length;  // one division instead of three: this runs per vertex and iteration
-    const float r[3] = {static_cast<float>(n[0] * inverse), static_cast<float>(n[1] * inverse), static_cast<float>(n[2] * inverse)};
+    const float r[3] = {static_cast<float>(n.x * inverse), static_cast<float>(n.y * inverse), static_cast<float>(n.z * inverse)};
     if (!std::isfinite(r[0]) || !std::isfinite(r[1]) || !std::isfinite(r[2])) return false;
     out[0] = r[0], out[1] = r[1], out[2] = r[2];
     return true;
 }
 
+void set_fallback(float* out) { out[0] = kFallback[0], out[1] = kFallback[1], out[2] = kFallback[2]; }
+
 }  // namespace
 
-void compute_area_weighted_normals(TriMesh& mesh, int threads) {
-    validate_mesh_arrays(mesh, "compute_area_weighted_normals");
-    MeshAdjacency adjacency;
-    adjacency.vertex_triangles = build_vertex_triangles(mesh, threads);
-    compute_area_weighted_normals(mesh, adjacency, threads);
-}
-
-void compute_area_weighted_normals(TriMesh& mesh, const MeshAdjacency& adjacency, int threads) {
-    const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
-    const CsrList& vt = adjacency.vertex_triangles;
-    if (vt.rows() != mesh.num_vertices()) throw InputError("compute_area_weighted_normals: the adjacency does not belong to this mesh");
+std::vector<float> area_weighted_normals(const TriMesh& mesh, const CsrList& vt, int threads) {
+    require_row_per_vertex(vt, mesh.num_vertices(), "compute_area_weighted_normals");
     std::vector<float> normals(mesh.vertices.size());
-    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+    parallel_blocks(static_cast<int64_t>(mesh.num_vertices()), threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t v = begin; v < end; ++v) {
-            // The cross product's length is twice the triangle's area: summing unnormalised cross products is the
-            // area-weighted mean direction.
+            // Summing unnormalised cross products is the area-weighted mean direction.
             double sum[3] = {0.0, 0.0, 0.0}, largest[3] = {0.0, 0.0, 0.0}, largest_norm = 0.0;
             for (int64_t k = vt.begin(v); k < vt.end(v); ++k) {
-                double n[3];
-                face_cross(mesh.vertices.data(), mesh.triangles.data() + 3 * static_cast<int64_t>(vt.items[k]), n);
-                const double norm = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+                const Vec3d n = triangle_cross(mesh.vertices.data(), mesh.triangles.data() + 3 * static_cast<int64_t>(vt.items[k]));
+                const double norm = dot(n, n);
                 if (!std::isfinite(norm)) continue;  // a non-finite neighbour must not poison this vertex
-                sum[0] += n[0], sum[1] += n[1], sum[2] += n[2];
-                if (norm > largest_norm) largest_norm = norm, largest[0] = n[0], largest[1] = n[1], largest[2] = n[2];
+                sum[0] += n.x, sum[1] += n.y, sum[2] += n.z;
+                if (norm > largest_norm) largest_norm = norm, largest[0] = n.x, largest[1] = n.y, largest[2] = n.z;
             }
             float* out = normals.data() + 3 * v;
             // Opposite faces can cancel (a thin sheet folded onto itself): fall back to the largest incident face.
-            if (!normalise_into(sum, out) && !normalise_into(largest, out))
-                out[0] = kFallback[0], out[1] = kFallback[1], out[2] = kFallback[2];
+            if (!normalise_into({sum[0], sum[1], sum[2]}, out) && !normalise_into({largest[0], largest[1], largest[2]}, out)) set_fallback(out);
         }
     });
-    mesh.normals.swap(normals);
+    return normals;
 }
 
-void smooth_normals(TriMesh& mesh, int iterations, int threads) {
-    validate_mesh_arrays(mesh, "smooth_normals");
+void smooth_normals(std::vector<float>& normals, const CsrList& neighbours, int iterations, int threads) {
     if (iterations < 0) throw InputError("smooth_normals: iterations must be >= 0, got " + std::to_string(iterations));
-    if (iterations == 0 && !mesh.normals.empty()) return;
-    smooth_normals(mesh, build_adjacency(mesh, threads), iterations, threads);
-}
-
-void smooth_normals(TriMesh& mesh, const MeshAdjacency& adjacency, int iterations, int threads) {
-    if (iterations < 0) throw InputError("smooth_normals: iterations must be >= 0, got " + std::to_string(iterations));
-    if (mesh.normals.empty()) compute_area_weighted_normals(mesh, adjacency, threads);
-    for (std::size_t i = 0; i < mesh.normals.size(); ++i)
-        if (!std::isfinite(mesh.normals[i]))
-            throw InputError("smooth_normals: normal of vertex " + std::to_string(i / 3) + " is not finite");
     if (iterations == 0) return;
-    const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
-    const CsrList& neighbours = adjacency.vertex_neighbours;
-    if (neighbours.rows() != mesh.num_vertices()) throw InputError("smooth_normals: the adjacency does not belong to this mesh");
-    std::vector<float> other(mesh.normals.size());
+    const int64_t nv = static_cast<int64_t>(normals.size() / 3);
+    require_row_per_vertex(neighbours, static_cast<std::size_t>(nv), "smooth_normals");
+    std::vector<float> other(normals.size());
     for (int it = 0; it < iterations; ++it) {
-        const float* in = mesh.normals.data();
+        const float* in = normals.data();
         float* out = other.data();
         parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
             for (int64_t i = begin; i < end; ++i) {
@@ -114,12 +81,36 @@ void smooth_normals(TriMesh& mesh, const MeshAdjacency& adjacency, int iteration
                     o[0] = sum[0] * inverse, o[1] = sum[1] * inverse, o[2] = sum[2] * inverse;
                     continue;
                 }
-                const double own[3] = {in[3 * i], in[3 * i + 1], in[3 * i + 2]};
-                if (!normalise_into(own, o)) o[0] = kFallback[0], o[1] = kFallback[1], o[2] = kFallback[2];
+                if (!normalise_into(to_vec3d(in + 3 * i), o)) set_fallback(o);
             }
         });
-        mesh.normals.swap(other);
+        normals.swap(other);
     }
+}
+
+std::vector<float> smoothed_vertex_normals(const TriMesh& mesh, const MeshAdjacency& adjacency, int iterations,
+                                           SmoothedNormals computed, int threads) {
+    if (computed.iterations == iterations && computed.values.size() == mesh.vertices.size()) return std::move(computed.values);
+    std::vector<float> normals = area_weighted_normals(mesh, adjacency.vertex_triangles, threads);
+    smooth_normals(normals, adjacency.vertex_neighbours, iterations, threads);
+    return normals;
+}
+
+void compute_area_weighted_normals(TriMesh& mesh, int threads) {
+    validate_mesh_arrays(mesh, "compute_area_weighted_normals");
+    mesh.normals = area_weighted_normals(mesh, build_vertex_triangles(mesh, threads), threads);
+}
+
+void smooth_normals(TriMesh& mesh, int iterations, int threads) {
+    validate_mesh_arrays(mesh, "smooth_normals");
+    if (iterations < 0) throw InputError("smooth_normals: iterations must be >= 0, got " + std::to_string(iterations));
+    if (iterations == 0 && !mesh.normals.empty()) return;
+    const MeshAdjacency adjacency = build_adjacency(mesh, threads);
+    if (mesh.normals.empty()) mesh.normals = area_weighted_normals(mesh, adjacency.vertex_triangles, threads);
+    const std::size_t non_finite = first_non_finite(mesh.normals);
+    if (non_finite < mesh.normals.size())
+        throw InputError("smooth_normals: normal of vertex " + std::to_string(non_finite / 3) + " is not finite");
+    smooth_normals(mesh.normals, adjacency.vertex_neighbours, iterations, threads);
 }
 
 }  // namespace meniscus

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "base/numbers.h"
-#include "post/volume.h"
+#include "mesh/components.h"
 #include "sph/clusters.h"
 
 namespace meniscus {

@@ -3,35 +3,42 @@
 // surface to them and loses up to half its volume. After smoothing, each connected component gets back the
 // volume it had before, by an offset along the vertex normals proportional to how strongly each vertex was
 // smoothed (its weight): droplets (weight ~0) do not move, smoothed regions move together, so no bump returns.
+// A guard then gives a component that smoothing collapsed its positions back.
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include "mesh/adjacency.h"
 #include "mesh/mesh.h"
+#include "parameters.h"
+#include "post/normals.h"
 
 namespace meniscus {
 
-// Connected components by shared vertices: a label per vertex (0 .. count-1, numbered by smallest vertex index,
-// so deterministic) and their count. Unreferenced vertices get their own labels.
-std::vector<int32_t> component_labels(const TriMesh& mesh, int32_t* count);
+// The surface as smoothing found it: what restoration and the collapse guard measure against.
+struct UnsmoothedSurface {
+    std::vector<int32_t> labels;   // connected component of each vertex (mesh/components.h)
+    int32_t components = 0;
+    std::vector<double> volumes;   // signed enclosed volume per component
+    std::vector<float> positions;  // 3 per vertex
+};
+UnsmoothedSurface record_unsmoothed_surface(const TriMesh& mesh, int threads);
 
-// Signed enclosed volume per component (divergence theorem, in double). Summed over fixed blocks of triangles,
-// blocks added in order: the same bits for any thread count.
-std::vector<double> component_volumes(const TriMesh& mesh, const std::vector<int32_t>& labels, int32_t count, int threads = 1);
+// Moves vertices along their smoothed area-weighted normals (normal_iterations of Eq. 12, computed once on the
+// smoothed surface) by s_c * amount_i so that component c's volume returns to its unsmoothed volume; amount empty
+// means 1 everywhere. |s_c| is capped at max_offset. Two Newton steps at most. Returns the normals it moved along:
+// the offsets are tiny against the edge lengths, so they are the restored surface's normals too.
+SmoothedNormals restore_component_volumes(TriMesh& mesh, const MeshAdjacency& adjacency, const UnsmoothedSurface& unsmoothed,
+                                          const std::vector<float>& amount, double max_offset, int normal_iterations, int threads);
 
-// Moves vertices along their smoothed area-weighted normals (normal_iterations of Eq. 12) by s_c * amount_i so
-// that component c's volume returns to target[c]; amount empty means 1 everywhere. |s_c| is capped at
-// max_offset. A few Newton steps. Leaves those normals in mesh.normals: the offsets are tiny against the edge
-// lengths, so they are the surface's normals too and the pipeline does not compute them a second time.
-struct MeshAdjacency;
-void restore_component_volumes(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<int32_t>& labels,
-                               const std::vector<double>& target, const std::vector<float>& amount, double max_offset,
-                               int normal_iterations, int threads);
+// The smoothing iterations of the normals restoration moves along: the output's own when it asks for smoothed
+// area-weighted normals (so that the normals stage can take them as they are), otherwise 10.
+int restoration_normal_iterations(const PostprocessParams& post);
 
 // Smoothing may collapse a component smaller than a few cubes (a blob around one grid point) into a point or a
-// line. Such a component gets its positions from `before` back: smoothing never leaves a degenerate triangle or
-// an inverted component. Returns the number of components reverted.
-std::size_t revert_collapsed_components(TriMesh& mesh, const std::vector<float>& before, const std::vector<int32_t>& labels,
-                                        int32_t count, const std::vector<double>& volumes_before, int threads = 1);
+// line. Such a component gets its unsmoothed positions back: smoothing never leaves a degenerate triangle or an
+// inverted component. Returns the number of components reverted.
+std::size_t revert_collapsed_components(TriMesh& mesh, const UnsmoothedSurface& unsmoothed, int threads);
 
 }  // namespace meniscus

@@ -72,8 +72,8 @@ public:
         return cache;
     }
 
-    // Calls visit(j, squared_distance) for every sorted particle j within `radius` (< cell_size) of x, in the same
-    // order as for_each_neighbor without a cache.
+    // Calls visit(j, squared_distance) for every sorted particle j within `radius` (< cell_size) of x, cell by cell
+    // in the order of for_each_cell_in_box.
     template <class Visit>
     void for_each_neighbor(const float* x, float radius, NeighborCells& cache, Visit&& visit) const {
         neighbor_cells(x, cache);
@@ -90,16 +90,8 @@ public:
     // Calls visit(j, squared_distance) for every sorted particle j within `radius` (< cell_size) of x.
     template <class Visit>
     void for_each_neighbor(const float* x, float radius, Visit&& visit) const {
-        const auto c = cell_of(x);
-        const float r2 = radius * radius;
-        for_each_cell_in_box({c[0] - 1, c[1] - 1, c[2] - 1}, {c[0] + 1, c[1] + 1, c[2] + 1}, [&](std::size_t cell) {
-            for (std::size_t j = cell_start_[cell]; j < cell_start_[cell + 1]; ++j) {
-                const float* p = &positions_[3 * j];
-                const float dx = x[0] - p[0], dy = x[1] - p[1], dz = x[2] - p[2];
-                const float d2 = dx * dx + dy * dy + dz * dz;
-                if (d2 < r2) visit(j, d2);
-            }
-        });
+        NeighborCells cache;
+        for_each_neighbor(x, radius, cache, visit);
     }
 
     // Lattice coordinate bits per axis: the particles may span up to 2^21 cells per axis.

@@ -3,19 +3,14 @@
 #include <stdexcept>
 #include <vector>
 
+#include "mesh/geometry.h"
+
 namespace meniscus {
 namespace mc {
 
 namespace {
 
-struct Vec3 {
-    double x, y, z;
-};
-Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-Vec3 cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-double dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-
-Vec3 corner_position(int c) { return {double(c & 1), double((c >> 1) & 1), double((c >> 2) & 1)}; }
+Vec3d corner_position(int c) { return {double(c & 1), double((c >> 1) & 1), double((c >> 2) & 1)}; }
 
 std::array<Edge, 12> make_edges() {
     std::array<Edge, 12> result{};
@@ -49,9 +44,9 @@ bool edges_share_face(int a, int b) {
     return false;
 }
 
-Vec3 edge_midpoint(int e) {
+Vec3d edge_midpoint(int e) {
     const Edge& edge = edges()[e];
-    Vec3 p = corner_position(edge.corner);
+    Vec3d p = corner_position(edge.corner);
     (edge.axis == 0 ? p.x : edge.axis == 1 ? p.y : p.z) += 0.5;
     return p;
 }
@@ -62,7 +57,7 @@ Case build_case(unsigned inside, unsigned joined) {
     next.fill(-1);
     for (int face = 0; face < 6; ++face) {
         const int axis = face / 2, side = face % 2;
-        Vec3 normal{0, 0, 0};
+        Vec3d normal{0, 0, 0};
         (axis == 0 ? normal.x : axis == 1 ? normal.y : normal.z) = side ? 1.0 : -1.0;
         const auto& c = face_corners(face);
         // Cyclic edges of the face: E0 = c0-c1, E1 = c1-c2, E2 = c2-c3, E3 = c3-c0.
@@ -97,7 +92,7 @@ Case build_case(unsigned inside, unsigned joined) {
             }
         }
         for (const Segment& s : segments) {
-            const Vec3 p = edge_midpoint(s.a), q = edge_midpoint(s.b);
+            const Vec3d p = edge_midpoint(s.a), q = edge_midpoint(s.b);
             const double side_of_corner = dot(cross(normal, q - p), corner_position(s.cut_corner) - p);
             // Seen from outside the cube, inside corners lie to the right of a segment's direction.
             const bool corner_on_right = side_of_corner < 0.0;

@@ -3,7 +3,7 @@
 
 The source is the SPlisHSPlasH double dam break frame 26 (4732 particles, id and velocity) from
 ../shared/data/splashsurf/, a big-endian binary legacy VTK file. Every output carries the same positions, ids and
-velocities, so tests/native/test_io_formats.cpp can compare each reader with the VTK reader value for value (text
+velocities, so the reader tests (tests/native/test_io_*.cpp) can compare each reader with the VTK reader value for value (text
 formats print the shortest decimal that reads back as the same float32).
 
 Besides the full frame it writes variants/: the first 5 particles in every VTK XML encoding combination (ascii,

@@ -12,403 +12,17 @@
 // members may be stored or deflated, with or without zip64 records (numpy always writes zip64 extra fields);
 // other compression methods and encryption are refused by name.
 //
-// Object arrays (pickles) are never loaded: they could run code.
-#include <zlib.h>
-
+// Object arrays (pickles) are never loaded: they could run code. The .npy parsing itself is npy.cpp; the zip
+// archive is parsers/zip.cpp.
 #include <algorithm>
-#include <memory>
 
-#include "io/io_util.h"
+#include "io/formats/npy.h"
+#include "io/parsers/zip.h"
 
 namespace meniscus {
 namespace io_detail {
 namespace {
 
-// ---- the header: a Python literal --------------------------------------------------------------------------
-
-struct PyValue {
-    enum class Kind { none, boolean, integer, string, sequence, dict } kind = Kind::none;
-    bool boolean = false;
-    std::int64_t integer = 0;
-    std::string string;
-    std::vector<PyValue> items;                           // tuple or list
-    std::vector<std::pair<std::string, PyValue>> entries;  // dict
-
-    const PyValue* get(std::string_view key) const {
-        for (const auto& e : entries)
-            if (e.first == key) return &e.second;
-        return nullptr;
-    }
-};
-
-class PyLiteralParser {
-public:
-    PyLiteralParser(const Cursor& c, std::string_view text, std::size_t base) : c_(c), text_(text), base_(base) {}
-
-    PyValue parse() {
-        PyValue v = value(0);
-        skip_space();
-        if (pos_ < text_.size()) fail("unexpected " + quote(text_.substr(pos_, 10)) + " after the header dictionary");
-        return v;
-    }
-
-private:
-    const Cursor& c_;
-    std::string_view text_;
-    std::size_t base_;  // file offset of text_[0], for messages
-    std::size_t pos_ = 0;
-
-    [[noreturn]] void fail(const std::string& what) const {
-        c_.fail("bad .npy header at " + c_.where(base_ + pos_) + ": " + what);
-    }
-
-    void skip_space() {
-        while (pos_ < text_.size() && Cursor::is_space(static_cast<unsigned char>(text_[pos_]))) ++pos_;
-    }
-
-    bool word(std::string_view w) {
-        if (text_.substr(pos_, w.size()) != w) return false;
-        pos_ += w.size();
-        return true;
-    }
-
-    PyValue value(int depth) {
-        if (depth > 16) fail("nested too deeply");
-        skip_space();
-        if (pos_ >= text_.size()) fail("it ends in the middle of a value");
-        PyValue v;
-        char ch = text_[pos_];
-        if (ch == '{') {
-            v.kind = PyValue::Kind::dict;
-            ++pos_;
-            while (true) {
-                skip_space();
-                if (pos_ < text_.size() && text_[pos_] == '}') {
-                    ++pos_;
-                    return v;
-                }
-                PyValue key = value(depth + 1);
-                if (key.kind != PyValue::Kind::string) fail("a dictionary key is not a string");
-                skip_space();
-                if (pos_ >= text_.size() || text_[pos_] != ':') fail("expected ':' after key " + quote(key.string));
-                ++pos_;
-                v.entries.emplace_back(key.string, value(depth + 1));
-                skip_space();
-                if (pos_ < text_.size() && text_[pos_] == ',') ++pos_;
-                else if (pos_ >= text_.size() || text_[pos_] != '}') fail("expected ',' or '}' in the dictionary");
-            }
-        }
-        if (ch == '(' || ch == '[') {
-            const char close = ch == '(' ? ')' : ']';
-            v.kind = PyValue::Kind::sequence;
-            ++pos_;
-            while (true) {
-                skip_space();
-                if (pos_ < text_.size() && text_[pos_] == close) {
-                    ++pos_;
-                    return v;
-                }
-                v.items.push_back(value(depth + 1));
-                skip_space();
-                if (pos_ < text_.size() && text_[pos_] == ',') ++pos_;
-                else if (pos_ >= text_.size() || text_[pos_] != close) fail(std::string("expected ',' or '") + close + "'");
-            }
-        }
-        if (ch == '\'' || ch == '"') {
-            v.kind = PyValue::Kind::string;
-            ++pos_;
-            while (pos_ < text_.size() && text_[pos_] != ch) {
-                if (text_[pos_] == '\\' && pos_ + 1 < text_.size()) ++pos_;
-                v.string += text_[pos_++];
-            }
-            if (pos_ >= text_.size()) fail("a string is not closed");
-            ++pos_;
-            return v;
-        }
-        if (ch == '-' || ch == '+' || (ch >= '0' && ch <= '9')) {
-            std::size_t start = pos_;
-            ++pos_;
-            while (pos_ < text_.size() && text_[pos_] >= '0' && text_[pos_] <= '9') ++pos_;
-            if (!parse_i64(text_.substr(start, pos_ - start), v.integer)) fail("bad integer " + quote(text_.substr(start, pos_ - start)));
-            if (pos_ < text_.size() && (text_[pos_] == 'L' || text_[pos_] == 'l')) ++pos_;  // Python 2 long
-            v.kind = PyValue::Kind::integer;
-            return v;
-        }
-        if (word("True")) {
-            v.kind = PyValue::Kind::boolean;
-            v.boolean = true;
-            return v;
-        }
-        if (word("False")) {
-            v.kind = PyValue::Kind::boolean;
-            return v;
-        }
-        if (word("None")) return v;
-        fail("unexpected " + quote(text_.substr(pos_, 10)));
-    }
-};
-
-// ---- dtypes --------------------------------------------------------------------------------------------------
-
-float half_to_float(std::uint16_t h) {
-    const std::uint32_t sign = std::uint32_t(h >> 15) << 31;
-    std::uint32_t exponent = (h >> 10) & 31, mantissa = h & 1023;
-    std::uint32_t bits;
-    if (exponent == 31) {
-        bits = sign | 0x7f800000u | (mantissa << 13);  // inf / nan
-    } else if (exponent == 0) {
-        if (mantissa == 0) {
-            bits = sign;
-        } else {  // subnormal: normalise
-            int e = -1;
-            do {
-                ++e;
-                mantissa <<= 1;
-            } while (!(mantissa & 1024));
-            bits = sign | (std::uint32_t(127 - 15 - e) << 23) | ((mantissa & 1023) << 13);
-        }
-    } else {
-        bits = sign | ((exponent + 127 - 15) << 23) | (mantissa << 13);
-    }
-    return bits_to_float(bits);
-}
-
-struct DType {
-    enum class Kind { number, half, skip, structured } kind = Kind::skip;
-    ScalarType type = ScalarType::f32;
-    bool big_endian = false;
-    std::uint64_t size = 0;  // bytes per element
-    std::string text;        // as written, for messages
-    struct Field {
-        std::string name;
-        DType* type = nullptr;
-        std::uint64_t offset = 0;
-        std::uint64_t count = 1;  // product of the subarray shape
-    };
-    std::vector<Field> fields;
-    std::vector<std::unique_ptr<DType>> owned;
-
-    bool numeric() const { return kind == Kind::number || kind == Kind::half; }
-};
-
-// Converts n elements of a numeric dtype, `stride` bytes apart, to float.
-void convert(const unsigned char* p, std::size_t n, std::size_t stride, const DType& t, float* out, std::size_t out_stride) {
-    if (t.kind == DType::Kind::half) {
-        for (std::size_t i = 0; i < n; ++i) {
-            const unsigned char* q = p + i * stride;
-            out[i * out_stride] = half_to_float(t.big_endian ? load_be16(q) : load_le16(q));
-        }
-        return;
-    }
-    if (stride == t.size && out_stride == 1) {
-        decode_to_float(p, n, t.type, t.big_endian, out);
-        return;
-    }
-    for (std::size_t i = 0; i < n; ++i) out[i * out_stride] = static_cast<float>(decode_scalar(p + i * stride, t.type, t.big_endian));
-}
-
-class NpyParser {
-public:
-    NpyParser(const Source& source) : c_(source) {}
-
-    // One named float column of the array: count rows of `components` values.
-    struct Column {
-        std::string name;
-        int components = 1;
-        std::vector<float> values;
-        bool integral = false;  // from an integer or bool dtype
-    };
-    struct Array {
-        std::vector<std::uint64_t> shape;
-        bool structured = false;
-        std::string descr;  // for messages
-        std::vector<Column> columns;
-        std::uint64_t rows() const { return shape.empty() ? 1 : shape[0]; }
-    };
-
-    Array parse() {
-        if (c_.remaining() < 6 || std::memcmp(c_.here(), "\x93NUMPY", 6) != 0)
-            c_.fail("not a NumPy .npy file: it does not start with '\\x93NUMPY'");
-        c_.take(6, "magic");
-        unsigned major = c_.u8("format version"), minor = c_.u8("format version");
-        std::uint64_t header_length = 0;
-        if (major == 1) {
-            header_length = load_le16(c_.take(2, "header length"));
-        } else if (major == 2 || major == 3) {
-            header_length = load_le32(c_.take(4, "header length"));
-        } else {
-            c_.fail("unsupported .npy format version " + std::to_string(major) + "." + std::to_string(minor) +
-                    " (supported: 1.0, 2.0, 3.0)");
-        }
-        // numpy itself refuses headers over 10000 bytes unless told otherwise; 1 MiB leaves room for huge records
-        // and keeps the parsed literal small.
-        if (header_length > (1u << 20)) c_.fail("the .npy header claims " + std::to_string(header_length) + " bytes (more than 1 MiB)");
-        std::size_t header_pos = c_.pos();
-        const unsigned char* header = c_.take(header_length, "the .npy header");
-        std::string_view text(reinterpret_cast<const char*>(header), static_cast<std::size_t>(header_length));
-        PyValue dict = PyLiteralParser(c_, text, header_pos).parse();
-        if (dict.kind != PyValue::Kind::dict) c_.fail("bad .npy header at " + c_.where(header_pos) + ": not a dictionary");
-
-        const PyValue* descr = dict.get("descr");
-        const PyValue* fortran = dict.get("fortran_order");
-        const PyValue* shape = dict.get("shape");
-        if (!descr || !fortran || !shape)
-            c_.fail("bad .npy header at " + c_.where(header_pos) + ": 'descr', 'fortran_order' and 'shape' are required");
-        if (fortran->kind != PyValue::Kind::boolean) c_.fail("bad .npy header: 'fortran_order' is not True or False");
-        if (shape->kind != PyValue::Kind::sequence) c_.fail("bad .npy header: 'shape' is not a tuple");
-        Array array;
-        for (const auto& dim : shape->items) {
-            if (dim.kind != PyValue::Kind::integer || dim.integer < 0)
-                c_.fail("bad .npy header: the shape has a dimension that is not a non-negative integer");
-            array.shape.push_back(static_cast<std::uint64_t>(dim.integer));
-        }
-        if (array.shape.size() > 32) c_.fail("bad .npy header: " + std::to_string(array.shape.size()) + " dimensions");
-
-        DType dtype;
-        parse_dtype(*descr, dtype, 0);
-        array.descr = dtype.text;
-        std::uint64_t elements = 1;
-        for (std::uint64_t dim : array.shape)
-            if (!checked_mul(elements, dim, elements)) c_.fail("the shape " + shape_text(array.shape) + " is impossibly large");
-        std::uint64_t bytes = 0;
-        if (!checked_mul(elements, dtype.size, bytes)) c_.fail("the shape " + shape_text(array.shape) + " is impossibly large");
-        c_.require(bytes, "array data of shape " + shape_text(array.shape) + " and dtype " + quote(dtype.text));
-        const unsigned char* data = c_.take(bytes, "array data");
-
-        if (dtype.kind == DType::Kind::structured) {
-            array.structured = true;
-            if (array.shape.size() != 1 || fortran->boolean)
-                c_.fail("a structured array must have shape (N,), not " + shape_text(array.shape));
-            const std::size_t n = static_cast<std::size_t>(array.shape[0]);
-            for (const auto& f : dtype.fields) {
-                if (!f.type->numeric()) continue;  // strings, nested records, padding: no float meaning
-                Column col;
-                col.name = f.name;
-                col.integral = f.type->kind == DType::Kind::number && scalar_is_integer(f.type->type);
-                col.components = static_cast<int>(f.count);
-                col.values.resize(n * f.count);
-                for (std::uint64_t k = 0; k < f.count && n > 0; ++k)  // no pointer arithmetic on an empty vector's null data()
-                    convert(data + f.offset + k * f.type->size, n, static_cast<std::size_t>(dtype.size), *f.type,
-                            col.values.data() + k, static_cast<std::size_t>(f.count));
-                array.columns.push_back(std::move(col));
-            }
-            return array;
-        }
-        if (!dtype.numeric())
-            c_.fail("unsupported dtype " + quote(dtype.text) + " (supported: bool, integers, float16/32/64, or a structured "
-                    "array of them; object arrays are never unpickled)");
-        Column col;
-        col.integral = dtype.kind == DType::Kind::number && scalar_is_integer(dtype.type);
-        // Values per row; 0 marks a row too wide to be a particle attribute (the array is then left out).
-        std::uint64_t per_row = 1;
-        for (std::size_t d = 1; d < array.shape.size(); ++d)
-            if (!checked_mul(per_row, array.shape[d], per_row) || per_row > 65536) per_row = 65537;
-        col.components = per_row > 65536 ? 0 : static_cast<int>(per_row);
-        col.values.resize(static_cast<std::size_t>(elements));
-        if (elements == 0) {
-            // nothing to convert (and data() may be null)
-        } else if (!fortran->boolean || array.shape.size() < 2) {
-            convert(data, col.values.size(), static_cast<std::size_t>(dtype.size), dtype, col.values.data(), 1);
-        } else {
-            // Fortran order: the first index varies fastest. Only 2-D arrays occur in practice; general N-D
-            // transposition would follow the same rule with more strides.
-            if (array.shape.size() != 2) c_.fail("Fortran-ordered arrays with more than 2 dimensions are not supported");
-            const std::size_t rows = static_cast<std::size_t>(array.shape[0]), cols = static_cast<std::size_t>(array.shape[1]);
-            for (std::size_t k = 0; k < cols; ++k)
-                convert(data + k * rows * dtype.size, rows, static_cast<std::size_t>(dtype.size), dtype, col.values.data() + k, cols);
-        }
-        array.columns.push_back(std::move(col));
-        return array;
-    }
-
-    static std::string shape_text(const std::vector<std::uint64_t>& shape) {
-        std::string s = "(";
-        for (std::size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
-        return s + (shape.size() == 1 ? ",)" : ")");
-    }
-
-private:
-    Cursor c_;
-
-    void parse_simple_dtype(const std::string& text, DType& t) {
-        t.text = text;
-        std::size_t i = 0;
-        char order = '=';
-        if (!text.empty() && (text[0] == '<' || text[0] == '>' || text[0] == '|' || text[0] == '=')) order = text[i++];
-        t.big_endian = order == '>';
-        if (i >= text.size()) c_.fail("bad dtype " + quote(text));
-        char kind = text[i++];
-        if (kind == 'O') c_.fail("unsupported dtype " + quote(text) + ": object arrays are pickles, which are never loaded");
-        std::uint64_t size = 0;
-        std::string_view digits(text.data() + i, text.size() - i);
-        std::size_t bracket = digits.find('[');  // datetime units: 'M8[ns]'
-        if (bracket != std::string_view::npos) digits = digits.substr(0, bracket);
-        if (kind == '?' && digits.empty()) size = 1;
-        else if (!parse_u64(digits, size) || size == 0 || size > (1u << 20)) c_.fail("bad dtype " + quote(text));
-        if (kind == 'U') {
-            if (!checked_mul(size, 4, size)) c_.fail("bad dtype " + quote(text));
-        }
-        t.size = size;
-        t.kind = DType::Kind::number;
-        if ((kind == 'b' || kind == '?') && size == 1) t.type = ScalarType::u8;
-        else if (kind == 'i' && size == 1) t.type = ScalarType::i8;
-        else if (kind == 'i' && size == 2) t.type = ScalarType::i16;
-        else if (kind == 'i' && size == 4) t.type = ScalarType::i32;
-        else if (kind == 'i' && size == 8) t.type = ScalarType::i64;
-        else if (kind == 'u' && size == 1) t.type = ScalarType::u8;
-        else if (kind == 'u' && size == 2) t.type = ScalarType::u16;
-        else if (kind == 'u' && size == 4) t.type = ScalarType::u32;
-        else if (kind == 'u' && size == 8) t.type = ScalarType::u64;
-        else if (kind == 'f' && size == 4) t.type = ScalarType::f32;
-        else if (kind == 'f' && size == 8) t.type = ScalarType::f64;
-        else if (kind == 'f' && size == 2) t.kind = DType::Kind::half;
-        else t.kind = DType::Kind::skip;  // strings, void, complex, datetime, long double: skipped in records
-    }
-
-    void parse_dtype(const PyValue& v, DType& t, int depth) {
-        if (depth > 8) c_.fail("bad .npy header: structured dtype nested too deeply");
-        if (v.kind == PyValue::Kind::string) {
-            parse_simple_dtype(v.string, t);
-            return;
-        }
-        if (v.kind != PyValue::Kind::sequence) c_.fail("bad .npy header: 'descr' is neither a string nor a list of fields");
-        t.kind = DType::Kind::structured;
-        t.text = "structured";
-        for (const auto& item : v.items) {
-            if (item.kind != PyValue::Kind::sequence || item.items.size() < 2 || item.items.size() > 3)
-                c_.fail("bad .npy header: a field of the structured dtype is not (name, type[, shape])");
-            DType::Field field;
-            const PyValue& name = item.items[0];
-            if (name.kind == PyValue::Kind::string) field.name = name.string;
-            else if (name.kind == PyValue::Kind::sequence && name.items.size() == 2 && name.items[1].kind == PyValue::Kind::string)
-                field.name = name.items[1].string;  // (title, name)
-            else c_.fail("bad .npy header: a field name is not a string");
-            t.owned.push_back(std::make_unique<DType>());
-            field.type = t.owned.back().get();
-            parse_dtype(item.items[1], *field.type, depth + 1);
-            if (item.items.size() == 3) {
-                const PyValue& shape = item.items[2];
-                std::vector<PyValue> dims = shape.kind == PyValue::Kind::sequence ? shape.items : std::vector<PyValue>{shape};
-                for (const auto& d : dims) {
-                    if (d.kind != PyValue::Kind::integer || d.integer < 0 || d.integer > 65536)
-                        c_.fail("bad .npy header: field " + quote(field.name) + " has a bad subarray shape");
-                    field.count *= static_cast<std::uint64_t>(d.integer);
-                }
-                if (field.count > 65536) c_.fail("bad .npy header: field " + quote(field.name) + " has more than 65536 components");
-            }
-            field.offset = t.size;
-            std::uint64_t bytes = 0;
-            if (!checked_mul(field.count, field.type->size, bytes) || t.size + bytes > (std::uint64_t(1) << 32))
-                c_.fail("bad .npy header: the structured dtype is impossibly large");
-            t.size += bytes;
-            t.fields.push_back(std::move(field));
-        }
-        if (t.size == 0) c_.fail("bad .npy header: the structured dtype has no bytes");
-    }
-};
-
-using Array = NpyParser::Array;
-using Column = NpyParser::Column;
 
 bool is_position_name(const std::string& name) {
     static const char* names[] = {"positions", "position", "pos", "points", "particles", "xyz", "p", "P"};
@@ -419,16 +33,16 @@ bool is_position_name(const std::string& name) {
 
 // Positions from a structured array's columns (x, y, z or one 3-component position field); the rest become
 // attributes. False when the array has no positions.
-bool take_structured(Array& array, ParticleData& out) {
+bool take_structured(NpyArray& array, ParticleData& out) {
     auto find = [&](auto pred) -> int {
         for (std::size_t i = 0; i < array.columns.size(); ++i)
             if (pred(array.columns[i])) return static_cast<int>(i);
         return -1;
     };
     const std::size_t n = static_cast<std::size_t>(array.rows());
-    int ix = find([](const Column& c) { return c.components == 1 && (c.name == "x" || c.name == "X"); });
-    int iy = find([](const Column& c) { return c.components == 1 && (c.name == "y" || c.name == "Y"); });
-    int iz = find([](const Column& c) { return c.components == 1 && (c.name == "z" || c.name == "Z"); });
+    int ix = find([](const NpyColumn& c) { return c.components == 1 && (c.name == "x" || c.name == "X"); });
+    int iy = find([](const NpyColumn& c) { return c.components == 1 && (c.name == "y" || c.name == "Y"); });
+    int iz = find([](const NpyColumn& c) { return c.components == 1 && (c.name == "z" || c.name == "Z"); });
     std::vector<bool> used(array.columns.size(), false);
     if (ix >= 0 && iy >= 0 && iz >= 0) {
         out.positions.resize(3 * n);
@@ -439,7 +53,7 @@ bool take_structured(Array& array, ParticleData& out) {
             used[static_cast<std::size_t>(idx[k])] = true;
         }
     } else {
-        int ip = find([](const Column& c) { return c.components == 3 && is_position_name(c.name); });
+        int ip = find([](const NpyColumn& c) { return c.components == 3 && is_position_name(c.name); });
         if (ip < 0) return false;
         out.positions = std::move(array.columns[static_cast<std::size_t>(ip)].values);
         used[static_cast<std::size_t>(ip)] = true;
@@ -456,157 +70,111 @@ bool take_structured(Array& array, ParticleData& out) {
     return true;
 }
 
-bool is_positions_shape(const Array& a) { return !a.structured && a.shape.size() == 2 && a.shape[1] == 3; }
+bool is_positions_shape(const NpyArray& a) { return !a.structured && a.shape.size() == 2 && a.shape[1] == 3; }
 
-// ---- zip -----------------------------------------------------------------------------------------------------
-
-struct ZipMember {
-    std::string name;
-    std::uint16_t flags = 0, method = 0;
-    std::uint32_t crc = 0;
-    std::uint64_t compressed = 0, uncompressed = 0, local_offset = 0;
-};
-
-class ZipReader {
+// The .npz reader: every .npy member parsed, then the positions chosen and the other per-particle members added.
+class NpzReader {
 public:
-    explicit ZipReader(const Source& source) : c_(source) {}
+    explicit NpzReader(const Source& source) : source_(source) {}
 
-    std::vector<ZipMember> members() {
-        const std::size_t size = c_.size();
-        const unsigned char* d = c_.source().data;
-        if (size < 22) c_.fail("not a zip archive (.npz): " + std::to_string(size) + " bytes are too few for the end record (truncated?)");
-        // The end-of-central-directory record sits in the last 22 + 65535 (comment) bytes.
-        std::size_t eocd = SIZE_MAX;
-        for (std::size_t i = size - 22 + 1; i-- > 0 && size - i <= 22 + 65535;)
-            if (load_le32(d + i) == 0x06054b50u) {
-                eocd = i;
-                break;
-            }
-        if (eocd == SIZE_MAX)
-            c_.fail("no zip end-of-central-directory record in the last " + std::to_string(std::min<std::size_t>(size, 22 + 65535)) +
-                    " bytes: the .npz archive is truncated or not a zip");
-        std::uint64_t entries = load_le16(d + eocd + 10);
-        std::uint64_t cd_size = load_le32(d + eocd + 12);
-        std::uint64_t cd_offset = load_le32(d + eocd + 16);
-        if (load_le16(d + eocd + 4) != 0 || load_le16(d + eocd + 6) != 0)
-            c_.fail("multi-part (split) zip archives are not supported");
-        if (entries == 0xffff || cd_size == 0xffffffffu || cd_offset == 0xffffffffu) {
-            // zip64: a locator just before the end record points at the zip64 end record.
-            if (eocd < 20 || load_le32(d + eocd - 20) != 0x07064b50u) c_.fail("zip64 archive without a zip64 end locator at " + c_.where(eocd));
-            std::uint64_t record = load_le64(d + eocd - 20 + 8);
-            if (record > size || size - record < 56 || load_le32(d + record) != 0x06064b50u)
-                c_.fail("the zip64 end record offset " + std::to_string(record) + " does not point at a zip64 end record");
-            entries = load_le64(d + record + 32);
-            cd_size = load_le64(d + record + 40);
-            cd_offset = load_le64(d + record + 48);
-        }
-        if (cd_offset > size || cd_size > size - cd_offset)
-            c_.fail("the zip central directory (" + std::to_string(cd_size) + " bytes at offset " + std::to_string(cd_offset) +
-                    ") lies outside the " + std::to_string(size) + "-byte file (truncated?)");
-        if (entries > cd_size / 46)
-            c_.fail("the zip central directory claims " + std::to_string(entries) + " members but has room for " +
-                    std::to_string(cd_size / 46));
-        std::vector<ZipMember> out;
-        out.reserve(static_cast<std::size_t>(entries));
-        Cursor cd(c_.source());
-        cd.seek(static_cast<std::size_t>(cd_offset));
-        const std::size_t cd_end = static_cast<std::size_t>(cd_offset + cd_size);
-        for (std::uint64_t e = 0; e < entries; ++e) {
-            std::size_t at = cd.pos();
-            if (cd_end - at < 46 || load_le32(cd.here()) != 0x02014b50u)
-                c_.fail("bad zip central directory entry " + std::to_string(e) + " at " + c_.where(at));
-            const unsigned char* h = cd.take(46, "zip central directory entry");
-            ZipMember m;
-            m.flags = load_le16(h + 8);
-            m.method = load_le16(h + 10);
-            m.crc = load_le32(h + 16);
-            m.compressed = load_le32(h + 20);
-            m.uncompressed = load_le32(h + 24);
-            std::uint16_t name_length = load_le16(h + 28), extra_length = load_le16(h + 30), comment_length = load_le16(h + 32);
-            m.local_offset = load_le32(h + 42);
-            if (std::uint64_t(name_length) + extra_length + comment_length > cd_end - cd.pos())
-                c_.fail("zip central directory entry " + std::to_string(e) + " at " + c_.where(at) + " runs past the directory");
-            const unsigned char* name = cd.take(name_length, "zip member name");
-            m.name.assign(reinterpret_cast<const char*>(name), name_length);
-            const unsigned char* extra = cd.take(extra_length, "zip extra field");
-            cd.take(comment_length, "zip member comment");
-            read_zip64_extra(extra, extra_length, m);
-            out.push_back(std::move(m));
-        }
-        return out;
-    }
-
-    // The member's bytes, inflated if needed; `budget` is what the whole archive may still decompress to.
-    Bytes extract(const ZipMember& m, std::uint64_t& budget) {
-        const std::string what = "zip member " + quote(m.name);
-        if (m.flags & 1) c_.fail(what + " is encrypted; encrypted archives are not supported");
-        if (m.method != 0 && m.method != 8)
-            c_.fail(what + " uses compression method " + std::to_string(m.method) + method_name(m.method) +
-                    "; only stored (0) and deflate (8) are supported (numpy.savez and savez_compressed write these)");
-        const std::size_t size = c_.size();
-        const unsigned char* d = c_.source().data;
-        if (m.local_offset > size || size - m.local_offset < 30 || load_le32(d + m.local_offset) != 0x04034b50u)
-            c_.fail(what + ": no local header at offset " + std::to_string(m.local_offset) + " (truncated or corrupt archive)");
-        std::uint64_t data = m.local_offset + 30 + load_le16(d + m.local_offset + 26) + load_le16(d + m.local_offset + 28);
-        if (data > size || m.compressed > size - data)
-            c_.fail(what + ": its " + std::to_string(m.compressed) + " bytes at offset " + std::to_string(data) +
-                    " run past the end of the " + std::to_string(size) + "-byte file (truncated?)");
-        Bytes out;
-        if (m.method == 0) {
-            if (m.compressed != m.uncompressed)
-                c_.fail(what + " is stored but its sizes differ (" + std::to_string(m.compressed) + " and " +
-                        std::to_string(m.uncompressed) + ")");
-            out.assign(d + data, d + data + m.compressed);
-        } else {
-            if (m.uncompressed > max_inflated_size(m.compressed) || m.uncompressed > budget)
-                c_.fail(what + ": " + std::to_string(m.compressed) + " compressed bytes claim to hold " +
-                        std::to_string(m.uncompressed) + ", beyond any real data; refusing a corrupt file or decompression bomb");
-            budget -= m.uncompressed;
-            out.resize(static_cast<std::size_t>(m.uncompressed));
-            inflate_exact(c_.source().path, d + data, static_cast<std::size_t>(m.compressed), out.data(), out.size(), -15, what);
-        }
-        std::uint32_t crc = 0;
-        for (std::size_t off = 0; off < out.size(); off += 1u << 30)
-            crc = static_cast<std::uint32_t>(crc32(crc, out.data() + off, static_cast<uInt>(std::min<std::size_t>(out.size() - off, 1u << 30))));
-        if (crc != m.crc) c_.fail(what + ": CRC-32 mismatch, the archive is corrupt");
+    ParticleData read() {
+        read_members();
+        if (arrays_.empty()) fail(source_.path, "the .npz archive has no .npy members");
+        used_.assign(arrays_.size(), false);
+        ParticleData out;
+        if (!take_positions_member(out) && !take_xyz_members(out) && !take_structured_member(out))
+            fail(source_.path, "no particle positions in the .npz archive: expected an (N, 3) member (preferably named "
+                               "'positions'), members x, y and z, or a structured member with fields x, y, z; it has: " + listing_);
+        add_attributes(out);
         return out;
     }
 
 private:
-    Cursor c_;
+    struct Member {
+        std::string name;  // without ".npy"
+        NpyArray array;
+    };
+    const Source& source_;
+    std::vector<Member> arrays_;
+    std::vector<bool> used_;  // members that gave the positions
+    std::string listing_;     // "name shape, ..." for messages
 
-    static std::string method_name(std::uint16_t method) {
-        switch (method) {
-            case 12: return " (bzip2)";
-            case 14: return " (LZMA)";
-            case 93: return " (Zstandard)";
-            case 95: return " (XZ)";
-            case 9: return " (deflate64)";
-            default: return "";
+    void read_members() {
+        ZipReader zip(source_);
+        std::uint64_t budget = max_inflated_size(source_.size);
+        for (const auto& m : zip.members()) {
+            if (m.name.size() < 4 || m.name.compare(m.name.size() - 4, 4, ".npy") != 0) continue;  // not an array
+            Bytes bytes = zip.extract(m, budget);
+            Source member{source_.path + ": member " + quote(m.name), bytes.data(), bytes.size(), m.method != 0};
+            Member named{m.name.substr(0, m.name.size() - 4), parse_npy(member)};
+            listing_ += (listing_.empty() ? "" : ", ") + named.name + " " + (named.array.structured ? "structured " : "") +
+                        shape_text(named.array.shape);
+            arrays_.push_back(std::move(named));
         }
     }
 
-    // Zip64 extended information (id 1): the 64-bit values of those fixed fields that hold 0xffffffff, in order.
-    void read_zip64_extra(const unsigned char* extra, std::size_t length, ZipMember& m) const {
-        std::size_t i = 0;
-        while (i + 4 <= length) {
-            std::uint16_t id = load_le16(extra + i), n = load_le16(extra + i + 2);
-            if (n > length - i - 4) break;
-            if (id == 1) {
-                const unsigned char* p = extra + i + 4;
-                std::size_t left = n;
-                auto next = [&](std::uint64_t& field) {
-                    if (field != 0xffffffffu) return;
-                    if (left < 8) c_.fail("zip member " + quote(m.name) + ": truncated zip64 extra field");
-                    field = load_le64(p);
-                    p += 8;
-                    left -= 8;
-                };
-                next(m.uncompressed);
-                next(m.compressed);
-                next(m.local_offset);
+    // An (N, 3) member: the one with a position name, else the first.
+    bool take_positions_member(ParticleData& out) {
+        int chosen = -1;
+        for (std::size_t i = 0; i < arrays_.size() && chosen < 0; ++i)
+            if (is_position_name(arrays_[i].name) && is_positions_shape(arrays_[i].array)) chosen = static_cast<int>(i);
+        for (std::size_t i = 0; i < arrays_.size() && chosen < 0; ++i)
+            if (is_positions_shape(arrays_[i].array)) chosen = static_cast<int>(i);
+        if (chosen < 0) return false;
+        out.positions = std::move(arrays_[static_cast<std::size_t>(chosen)].array.columns[0].values);
+        used_[static_cast<std::size_t>(chosen)] = true;
+        return true;
+    }
+
+    // Separate 1-D members x, y and z of one length.
+    bool take_xyz_members(ParticleData& out) {
+        int idx[3] = {-1, -1, -1};
+        for (std::size_t i = 0; i < arrays_.size(); ++i)
+            for (int k = 0; k < 3; ++k)
+                if (arrays_[i].name == std::string(1, "xyz"[k]) && !arrays_[i].array.structured && arrays_[i].array.shape.size() == 1)
+                    idx[k] = static_cast<int>(i);
+        if (idx[0] < 0 || idx[1] < 0 || idx[2] < 0) return false;
+        const std::uint64_t n = arrays_[static_cast<std::size_t>(idx[0])].array.shape[0];
+        for (int k = 1; k < 3; ++k)
+            if (arrays_[static_cast<std::size_t>(idx[k])].array.shape[0] != n)
+                fail(source_.path, "the members x, y and z have different lengths (" + listing_ + ")");
+        out.positions.resize(static_cast<std::size_t>(3 * n));
+        for (int k = 0; k < 3; ++k) {
+            const auto& v = arrays_[static_cast<std::size_t>(idx[k])].array.columns[0].values;
+            for (std::size_t i = 0; i < n; ++i) out.positions[3 * i + k] = v[i];
+            used_[static_cast<std::size_t>(idx[k])] = true;
+        }
+        return true;
+    }
+
+    // The first structured member with positions inside; its other fields become attributes.
+    bool take_structured_member(ParticleData& out) {
+        for (std::size_t i = 0; i < arrays_.size(); ++i)
+            if (arrays_[i].array.structured && take_structured(arrays_[i].array, out)) {
+                used_[i] = true;
+                return true;
             }
-            i += 4 + n;
+        return false;
+    }
+
+    // Every other member whose first dimension is the particle count (others, a frame time or a box, are not
+    // per-particle data), named after the member (and the field, for structured members).
+    void add_attributes(ParticleData& out) {
+        const std::size_t n = out.size();
+        for (std::size_t i = 0; i < arrays_.size(); ++i) {
+            if (used_[i]) continue;
+            NpyArray& a = arrays_[i].array;
+            if (a.shape.empty() || a.shape[0] != n) continue;
+            for (auto& col : a.columns) {
+                if (a.rows() != 0 && col.values.size() / a.rows() > 65536) continue;
+                Attribute attr;
+                attr.name = a.structured ? arrays_[i].name + "." + col.name : arrays_[i].name;
+                attr.components = n ? static_cast<int>(col.values.size() / n) : std::max(col.components, 1);
+                if (attr.components == 0) continue;
+                attr.values = std::move(col.values);
+                attr.integral = col.integral;
+                out.attributes.push_back(std::move(attr));
+            }
         }
     }
 };
@@ -614,7 +182,7 @@ private:
 }  // namespace
 
 ParticleData read_npy_particles(const Source& source) {
-    Array array = NpyParser(source).parse();
+    NpyArray array = parse_npy(source);
     ParticleData out;
     if (array.structured) {
         if (!take_structured(array, out))
@@ -623,89 +191,12 @@ ParticleData read_npy_particles(const Source& source) {
         return out;
     }
     if (!is_positions_shape(array))
-        fail(source.path, "the array has shape " + NpyParser::shape_text(array.shape) + "; particle positions need shape (N, 3)");
+        fail(source.path, "the array has shape " + shape_text(array.shape) + "; particle positions need shape (N, 3)");
     out.positions = std::move(array.columns[0].values);
     return out;
 }
 
-ParticleData read_npz_particles(const Source& source) {
-    ZipReader zip(source);
-    std::vector<ZipMember> members = zip.members();
-    std::uint64_t budget = max_inflated_size(source.size);
-    struct Named {
-        std::string name;
-        Array array;
-    };
-    std::vector<Named> arrays;
-    std::string listing;
-    for (const auto& m : members) {
-        if (m.name.size() < 4 || m.name.compare(m.name.size() - 4, 4, ".npy") != 0) continue;  // not an array
-        Bytes bytes = zip.extract(m, budget);
-        Source member{source.path + ": member " + quote(m.name), bytes.data(), bytes.size(), m.method != 0};
-        Named named{m.name.substr(0, m.name.size() - 4), NpyParser(member).parse()};
-        listing += (listing.empty() ? "" : ", ") + named.name + " " +
-                   (named.array.structured ? "structured " : "") + NpyParser::shape_text(named.array.shape);
-        arrays.push_back(std::move(named));
-    }
-    if (arrays.empty()) fail(source.path, "the .npz archive has no .npy members");
-
-    ParticleData out;
-    int chosen = -1;
-    for (std::size_t i = 0; i < arrays.size() && chosen < 0; ++i)
-        if (is_position_name(arrays[i].name) && is_positions_shape(arrays[i].array)) chosen = static_cast<int>(i);
-    for (std::size_t i = 0; i < arrays.size() && chosen < 0; ++i)
-        if (is_positions_shape(arrays[i].array)) chosen = static_cast<int>(i);
-    std::vector<bool> used(arrays.size(), false);
-    if (chosen >= 0) {
-        out.positions = std::move(arrays[static_cast<std::size_t>(chosen)].array.columns[0].values);
-        used[static_cast<std::size_t>(chosen)] = true;
-    } else {
-        // Separate x, y and z members, or a structured member with the positions inside.
-        int idx[3] = {-1, -1, -1};
-        for (std::size_t i = 0; i < arrays.size(); ++i)
-            for (int k = 0; k < 3; ++k)
-                if (arrays[i].name == std::string(1, "xyz"[k]) && !arrays[i].array.structured && arrays[i].array.shape.size() == 1)
-                    idx[k] = static_cast<int>(i);
-        if (idx[0] >= 0 && idx[1] >= 0 && idx[2] >= 0) {
-            const std::uint64_t n = arrays[static_cast<std::size_t>(idx[0])].array.shape[0];
-            for (int k = 1; k < 3; ++k)
-                if (arrays[static_cast<std::size_t>(idx[k])].array.shape[0] != n)
-                    fail(source.path, "the members x, y and z have different lengths (" + listing + ")");
-            out.positions.resize(static_cast<std::size_t>(3 * n));
-            for (int k = 0; k < 3; ++k) {
-                const auto& v = arrays[static_cast<std::size_t>(idx[k])].array.columns[0].values;
-                for (std::size_t i = 0; i < n; ++i) out.positions[3 * i + k] = v[i];
-                used[static_cast<std::size_t>(idx[k])] = true;
-            }
-        } else {
-            for (std::size_t i = 0; i < arrays.size() && chosen < 0; ++i)
-                if (arrays[i].array.structured && take_structured(arrays[i].array, out)) {
-                    chosen = static_cast<int>(i);
-                    used[i] = true;
-                }
-            if (chosen < 0)
-                fail(source.path, "no particle positions in the .npz archive: expected an (N, 3) member (preferably named "
-                                  "'positions'), members x, y and z, or a structured member with fields x, y, z; it has: " + listing);
-        }
-    }
-    const std::size_t n = out.size();
-    for (std::size_t i = 0; i < arrays.size(); ++i) {
-        if (used[i]) continue;
-        Array& a = arrays[i].array;
-        if (a.shape.empty() || a.shape[0] != n) continue;  // not per-particle data
-        for (auto& col : a.columns) {
-            if (a.rows() != 0 && col.values.size() / a.rows() > 65536) continue;
-            Attribute attr;
-            attr.name = a.structured ? arrays[i].name + "." + col.name : arrays[i].name;
-            attr.components = n ? static_cast<int>(col.values.size() / n) : std::max(col.components, 1);
-            if (attr.components == 0) continue;
-            attr.values = std::move(col.values);
-            attr.integral = col.integral;
-            out.attributes.push_back(std::move(attr));
-        }
-    }
-    return out;
-}
+ParticleData read_npz_particles(const Source& source) { return NpzReader(source).read(); }
 
 }  // namespace io_detail
 }  // namespace meniscus

@@ -109,97 +109,129 @@ float parse_cell(const Cursor& c, std::string_view field, std::size_t line_no, c
            (field.empty() ? std::string("empty value") : "bad value " + quote(field)) + " (expected a number)");
 }
 
-}  // namespace
+// A CSV table: the header's column names, grouped into attributes, and the values read column by column.
+class CsvReader {
+public:
+    explicit CsvReader(const Source& source) : c_(source) {}
 
-ParticleData read_csv_particles(const Source& source) {
-    Cursor c(source);
-    if (c.remaining() >= 3 && std::memcmp(c.here(), "\xef\xbb\xbf", 3) == 0) c.take(3, "byte order mark");
-    std::size_t line_no = 0;
-    std::string_view header;
-    while (!c.at_end()) {
-        ++line_no;
-        header = c.line();
-        if (!is_blank_or_comment(header)) break;
-        header = {};
+    ParticleData read() {
+        read_header();
+        groups_ = group_columns(names_);
+        find_positions();
+        read_rows();
+        return assemble();
     }
-    if (header.empty()) c.fail("no header line: a CSV particle file starts with a row of column names including x, y and z");
-    const std::size_t header_line = line_no;
-    char delimiter = header.find(',') != std::string_view::npos   ? ','
+
+private:
+    // A header can only have as many columns as it has characters; a cap keeps a binary file taken for CSV cheap.
+    static constexpr std::size_t kMaxColumns = 4096;
+    Cursor c_;
+    std::size_t line_no_ = 0, header_line_ = 0;
+    char delimiter_ = 0;  // 0: runs of white space
+    std::vector<std::string> names_;
+    std::vector<ColumnGroup> groups_;
+    std::size_t pos_columns_[3] = {0, 0, 0};
+    std::vector<bool> is_position_;       // per group
+    std::vector<std::vector<float>> values_;  // per column, while reading
+    std::vector<std::string_view> fields_;
+
+    // The first line that is neither blank nor a comment; its delimiter is the first of ',', ';' and tab in it.
+    void read_header() {
+        if (c_.remaining() >= 3 && std::memcmp(c_.here(), "\xef\xbb\xbf", 3) == 0) c_.take(3, "byte order mark");
+        std::string_view header;
+        while (!c_.at_end()) {
+            ++line_no_;
+            header = c_.line();
+            if (!is_blank_or_comment(header)) break;
+            header = {};
+        }
+        if (header.empty()) c_.fail("no header line: a CSV particle file starts with a row of column names including x, y and z");
+        header_line_ = line_no_;
+        delimiter_ = header.find(',') != std::string_view::npos   ? ','
                      : header.find(';') != std::string_view::npos ? ';'
                      : header.find('\t') != std::string_view::npos ? '\t'
                                                                    : 0;
-    // A header can only have as many columns as it has characters; a cap keeps a binary file taken for CSV cheap.
-    constexpr std::size_t kMaxColumns = 4096;
-    std::vector<std::string_view> fields;
-    const std::size_t columns = split_fields(header, delimiter, fields, kMaxColumns);
-    if (columns > kMaxColumns) c.fail("the header has " + std::to_string(columns) + " columns (at most " + std::to_string(kMaxColumns) + ")");
-    std::vector<std::string> names;
-    for (auto f : fields) names.emplace_back(f);
-
-    std::vector<ColumnGroup> groups = group_columns(names);
-    int gx = -1, gy = -1, gz = -1, gp = -1;
-    for (std::size_t g = 0; g < groups.size(); ++g) {
-        const auto& group = groups[g];
-        if (group.columns.size() == 1) {
-            if (iequals(group.name, "x") && gx < 0) gx = static_cast<int>(g);
-            if (iequals(group.name, "y") && gy < 0) gy = static_cast<int>(g);
-            if (iequals(group.name, "z") && gz < 0) gz = static_cast<int>(g);
-        } else if (group.columns.size() == 3 && gp < 0) {
-            for (const char* n : {"points", "position", "positions", "pos"})
-                if (iequals(group.name, n)) gp = static_cast<int>(g);
-        }
+        const std::size_t columns = split_fields(header, delimiter_, fields_, kMaxColumns);
+        if (columns > kMaxColumns) c_.fail("the header has " + std::to_string(columns) + " columns (at most " + std::to_string(kMaxColumns) + ")");
+        for (auto f : fields_) names_.emplace_back(f);
     }
-    std::size_t pos_columns[3];
-    std::vector<bool> is_position(groups.size(), false);
-    if (gx >= 0 && gy >= 0 && gz >= 0) {
-        pos_columns[0] = groups[static_cast<std::size_t>(gx)].columns[0];
-        pos_columns[1] = groups[static_cast<std::size_t>(gy)].columns[0];
-        pos_columns[2] = groups[static_cast<std::size_t>(gz)].columns[0];
-        is_position[static_cast<std::size_t>(gx)] = is_position[static_cast<std::size_t>(gy)] = is_position[static_cast<std::size_t>(gz)] = true;
-    } else if (gp >= 0) {
-        for (int k = 0; k < 3; ++k) pos_columns[k] = groups[static_cast<std::size_t>(gp)].columns[static_cast<std::size_t>(k)];
-        is_position[static_cast<std::size_t>(gp)] = true;
-    } else {
-        std::string list;
-        for (std::size_t i = 0; i < names.size() && i < 20; ++i) list += (i ? ", " : "") + quote(names[i]);
-        c.fail("the header on line " + std::to_string(header_line) + " has no columns x, y and z (nor Points:0..2); it has " + list);
+
+    // Columns x, y, z (any case), else a 3-column group named Points / position / positions / pos.
+    void find_positions() {
+        int gx = -1, gy = -1, gz = -1, gp = -1;
+        for (std::size_t g = 0; g < groups_.size(); ++g) {
+            const auto& group = groups_[g];
+            if (group.columns.size() == 1) {
+                if (iequals(group.name, "x") && gx < 0) gx = static_cast<int>(g);
+                if (iequals(group.name, "y") && gy < 0) gy = static_cast<int>(g);
+                if (iequals(group.name, "z") && gz < 0) gz = static_cast<int>(g);
+            } else if (group.columns.size() == 3 && gp < 0) {
+                for (const char* n : {"points", "position", "positions", "pos"})
+                    if (iequals(group.name, n)) gp = static_cast<int>(g);
+            }
+        }
+        is_position_.assign(groups_.size(), false);
+        if (gx >= 0 && gy >= 0 && gz >= 0) {
+            const int xyz[3] = {gx, gy, gz};
+            for (int k = 0; k < 3; ++k) {
+                pos_columns_[k] = groups_[static_cast<std::size_t>(xyz[k])].columns[0];
+                is_position_[static_cast<std::size_t>(xyz[k])] = true;
+            }
+        } else if (gp >= 0) {
+            for (int k = 0; k < 3; ++k) pos_columns_[k] = groups_[static_cast<std::size_t>(gp)].columns[static_cast<std::size_t>(k)];
+            is_position_[static_cast<std::size_t>(gp)] = true;
+        } else {
+            std::string list;
+            for (std::size_t i = 0; i < names_.size() && i < 20; ++i) list += (i ? ", " : "") + quote(names_[i]);
+            c_.fail("the header on line " + std::to_string(header_line_) + " has no columns x, y and z (nor Points:0..2); it has " + list);
+        }
     }
 
     // Column-major while reading, interleaved at the end.
-    std::vector<std::vector<float>> values(columns);
-    while (!c.at_end()) {
-        ++line_no;
-        std::string_view line = c.line();
-        if (is_blank_or_comment(line)) continue;
-        std::size_t n = split_fields(line, delimiter, fields, columns + 1);
-        if (n != columns)
-            c.fail("line " + std::to_string(line_no) + " has " + std::to_string(n) + " fields but the header has " +
-                   std::to_string(columns) + (c.at_end() ? " (truncated?)" : ""));
-        for (std::size_t k = 0; k < columns; ++k) values[k].push_back(parse_cell(c, fields[k], line_no, names[k]));
+    void read_rows() {
+        const std::size_t columns = names_.size();
+        values_.resize(columns);
+        while (!c_.at_end()) {
+            ++line_no_;
+            std::string_view line = c_.line();
+            if (is_blank_or_comment(line)) continue;
+            std::size_t n = split_fields(line, delimiter_, fields_, columns + 1);
+            if (n != columns)
+                c_.fail("line " + std::to_string(line_no_) + " has " + std::to_string(n) + " fields but the header has " +
+                        std::to_string(columns) + (c_.at_end() ? " (truncated?)" : ""));
+            for (std::size_t k = 0; k < columns; ++k) values_[k].push_back(parse_cell(c_, fields_[k], line_no_, names_[k]));
+        }
     }
 
-    ParticleData out;
-    const std::size_t rows = values.empty() ? 0 : values[0].size();
-    out.positions.resize(3 * rows);
-    for (int k = 0; k < 3; ++k) {
-        const auto& col = values[pos_columns[k]];
-        for (std::size_t i = 0; i < rows; ++i) out.positions[3 * i + static_cast<std::size_t>(k)] = col[i];
-    }
-    for (std::size_t g = 0; g < groups.size(); ++g) {
-        if (is_position[g]) continue;
-        Attribute a;
-        a.name = groups[g].name;
-        a.components = static_cast<int>(groups[g].columns.size());
-        a.values.resize(rows * groups[g].columns.size());
-        for (std::size_t j = 0; j < groups[g].columns.size(); ++j) {
-            std::vector<float>& col = values[groups[g].columns[j]];
-            for (std::size_t i = 0; i < rows; ++i) a.values[i * groups[g].columns.size() + j] = col[i];
-            std::vector<float>().swap(col);  // release as we go: the table is held twice only column by column
+    ParticleData assemble() {
+        ParticleData out;
+        const std::size_t rows = values_.empty() ? 0 : values_[0].size();
+        out.positions.resize(3 * rows);
+        for (int k = 0; k < 3; ++k) {
+            const auto& col = values_[pos_columns_[k]];
+            for (std::size_t i = 0; i < rows; ++i) out.positions[3 * i + static_cast<std::size_t>(k)] = col[i];
         }
-        out.attributes.push_back(std::move(a));
+        for (std::size_t g = 0; g < groups_.size(); ++g) {
+            if (is_position_[g]) continue;
+            const std::vector<std::size_t>& columns = groups_[g].columns;
+            Attribute a;
+            a.name = groups_[g].name;
+            a.components = static_cast<int>(columns.size());
+            a.values.resize(rows * columns.size());
+            for (std::size_t j = 0; j < columns.size(); ++j) {
+                std::vector<float>& col = values_[columns[j]];
+                for (std::size_t i = 0; i < rows; ++i) a.values[i * columns.size() + j] = col[i];
+                std::vector<float>().swap(col);  // release as we go: the table is held twice only column by column
+            }
+            out.attributes.push_back(std::move(a));
+        }
+        return out;
     }
-    return out;
-}
+};
+
+}  // namespace
+
+ParticleData read_csv_particles(const Source& source) { return CsvReader(source).read(); }
 
 namespace {
 

@@ -1,0 +1,42 @@
+#include "mesh/mesh.h"
+
+#include <cmath>
+#include <limits>
+
+#include "base/errors.h"
+
+namespace meniscus {
+
+void validate_mesh_arrays(const TriMesh& mesh, const std::string& where) {
+    if (mesh.vertices.size() % 3 != 0)
+        throw InputError(where + ": vertices must hold 3 floats per vertex, got " + std::to_string(mesh.vertices.size()));
+    if (mesh.triangles.size() % 3 != 0)
+        throw InputError(where + ": triangles must hold 3 indices per triangle, got " +
+                         std::to_string(mesh.triangles.size()));
+    const std::size_t nv = mesh.num_vertices();
+    if (nv > static_cast<std::size_t>(std::numeric_limits<int32_t>::max()))
+        throw InputError(where + ": too many vertices for 32-bit indices (" + std::to_string(nv) + ")");
+    const int32_t* t = mesh.triangles.data();
+    const std::size_t n = mesh.triangles.size();
+    for (std::size_t i = 0; i < n; ++i)
+        if (t[i] < 0 || static_cast<std::size_t>(t[i]) >= nv)
+            throw InputError(where + ": triangle " + std::to_string(i / 3) + " uses vertex index " + std::to_string(t[i]) +
+                             " but the mesh has " + std::to_string(nv) + " vertices");
+    if (!mesh.normals.empty() && mesh.normals.size() != mesh.vertices.size())
+        throw InputError(where + ": normals must be empty or 3 floats per vertex, got " + std::to_string(mesh.normals.size()) +
+                         " for " + std::to_string(nv) + " vertices");
+    for (const Attribute& a : mesh.attributes) {
+        if (a.components <= 0 || a.values.size() != nv * static_cast<std::size_t>(a.components))
+            throw InputError(where + ": vertex attribute '" + a.name + "' has " + std::to_string(a.values.size()) +
+                             " values with " + std::to_string(a.components) + " components, expected one tuple per vertex (" +
+                             std::to_string(nv) + ")");
+    }
+}
+
+std::size_t first_non_finite(const std::vector<float>& values) {
+    for (std::size_t i = 0; i < values.size(); ++i)
+        if (!std::isfinite(values[i])) return i;
+    return values.size();
+}
+
+}  // namespace meniscus

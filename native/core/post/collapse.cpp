@@ -1,0 +1,92 @@
+#include "post/collapse.h"
+
+#include "base/parallel.h"
+
+namespace meniscus {
+
+namespace {
+
+constexpr int64_t kBlock = 4096;
+
+}  // namespace
+
+MeshAdjacency working_adjacency(std::vector<int32_t>& triangles, std::vector<float>& positions, int threads) {
+    TriMesh view;  // borrows the arrays for the build and hands them back
+    view.vertices.swap(positions);
+    view.triangles.swap(triangles);
+    MeshAdjacency adjacency = build_adjacency(view, threads);
+    positions.swap(view.vertices);
+    triangles.swap(view.triangles);
+    return adjacency;
+}
+
+void drop_deleted_triangles(std::vector<int32_t>& triangles, const std::vector<uint8_t>& deleted) {
+    std::size_t out = 0;
+    for (std::size_t t = 0; t < deleted.size(); ++t) {
+        if (deleted[t]) continue;
+        for (int k = 0; k < 3; ++k) triangles[3 * out + k] = triangles[3 * t + k];
+        ++out;
+    }
+    triangles.resize(3 * out);
+}
+
+std::vector<int32_t> compact_into(TriMesh& mesh, std::vector<int32_t>& triangles, const std::vector<float>& positions,
+                                  const std::vector<uint8_t>& removed, const std::vector<int32_t>* group_next, int threads) {
+    const int64_t nv = static_cast<int64_t>(removed.size());
+    std::vector<int32_t> new_index(static_cast<std::size_t>(nv), -1);
+    std::vector<int32_t> survivors;
+    survivors.reserve(static_cast<std::size_t>(nv));
+    for (int64_t v = 0; v < nv; ++v)
+        if (!removed[v]) {
+            new_index[v] = static_cast<int32_t>(survivors.size());
+            survivors.push_back(static_cast<int32_t>(v));
+        }
+    const int64_t ns = static_cast<int64_t>(survivors.size());
+    parallel_blocks(static_cast<int64_t>(triangles.size()), threads, 16 * kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i) triangles[i] = new_index[triangles[i]];
+    });
+    std::vector<float> vertices(3 * static_cast<std::size_t>(ns));
+    parallel_blocks(ns, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i)
+            for (int k = 0; k < 3; ++k) vertices[3 * i + k] = positions[3 * static_cast<int64_t>(survivors[i]) + k];
+    });
+    auto gather = [&](std::vector<float>& values, int components, bool renormalise) {
+        std::vector<float> out(static_cast<std::size_t>(ns) * components);
+        parallel_blocks(ns, threads, kBlock, [&](int64_t begin, int64_t end) {
+            std::vector<double> sum(static_cast<std::size_t>(components));
+            for (int64_t i = begin; i < end; ++i) {
+                const int64_t v = survivors[i];
+                float* dst = out.data() + i * components;
+                const float* own = values.data() + v * components;
+                if (!group_next || (*group_next)[v] == -1) {
+                    std::copy(own, own + components, dst);
+                    continue;
+                }
+                std::fill(sum.begin(), sum.end(), 0.0);
+                int64_t count = 0;
+                for (int32_t u = static_cast<int32_t>(v); u != -1; u = (*group_next)[u], ++count)
+                    for (int k = 0; k < components; ++k) sum[k] += values[static_cast<int64_t>(u) * components + k];
+                double length = 0.0;
+                for (int k = 0; k < components; ++k) length += sum[k] * sum[k];
+                if (renormalise) {
+                    length = std::sqrt(length);
+                    if (!(length > 0.0) || !std::isfinite(length)) {
+                        std::copy(own, own + components, dst);
+                        continue;
+                    }
+                    for (int k = 0; k < components; ++k) dst[k] = static_cast<float>(sum[k] / length);
+                } else {
+                    for (int k = 0; k < components; ++k) dst[k] = static_cast<float>(sum[k] / double(count));
+                }
+            }
+        });
+        values.swap(out);
+    };
+    if (!mesh.normals.empty()) gather(mesh.normals, 3, true);
+    for (Attribute& a : mesh.attributes) gather(a.values, a.components, false);
+    mesh.vertices.swap(vertices);
+    mesh.triangles.swap(triangles);
+    return new_index;
+}
+
+}  // namespace meniscus

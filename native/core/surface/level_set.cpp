@@ -1,0 +1,141 @@
+#include "surface/level_set.h"
+
+#include <algorithm>
+#include <cmath>
+
+#if defined(__SSE2__) || defined(_M_X64)
+#include <immintrin.h>
+#endif
+
+#include "base/parallel.h"
+
+namespace meniscus {
+
+namespace {
+
+// Adds factor * W-shape(q) to row[0 .. n) with q = sqrt(dyz + dx2[i]) / H, in the branch-free spelling of the
+// spline (sph/kernel.h). Written with SSE intrinsics where available because the compiler turns the max into four
+// instructions (a blend, for NaN semantics the values here cannot have); the scalar tail does the same operations
+// in the same order, so every point gets the same bits either way.
+inline void splat_row(float* row, const float* dx2, int n, float dyz, float inverse_support, float factor) {
+    int i = 0;
+#if defined(__SSE2__) || defined(_M_X64)
+    const __m128 dyz4 = _mm_set1_ps(dyz), inverse4 = _mm_set1_ps(inverse_support), factor4 = _mm_set1_ps(factor);
+    const __m128 one = _mm_set1_ps(1.0f), two = _mm_set1_ps(2.0f), zero = _mm_setzero_ps();
+    for (; i + 4 <= n; i += 4) {
+        const __m128 q = _mm_mul_ps(_mm_sqrt_ps(_mm_add_ps(dyz4, _mm_loadu_ps(dx2 + i))), inverse4);
+        const __m128 a = _mm_max_ps(_mm_sub_ps(one, q), zero);
+        const __m128 b = _mm_max_ps(_mm_sub_ps(one, _mm_mul_ps(two, q)), zero);
+        const __m128 shape = _mm_sub_ps(_mm_mul_ps(_mm_mul_ps(_mm_mul_ps(two, a), a), a), _mm_mul_ps(_mm_mul_ps(b, b), b));
+        _mm_storeu_ps(row + i, _mm_add_ps(_mm_loadu_ps(row + i), _mm_mul_ps(factor4, shape)));
+    }
+#endif
+    for (; i < n; ++i) row[i] += factor * CubicSplineKernel::shape_branch_free(std::sqrt(dyz + dx2[i]) * inverse_support);
+}
+
+// Colour field (Eq. 1) at a brick's (kBrick + 1)^3 points: every particle near the brick splats its kernel onto
+// the points within its support, row by row.
+class ColourFieldSampler {
+public:
+    ColourFieldSampler(const SphField& field, double cube_edge, double threshold)
+        : field_(field), cube_(cube_edge), threshold_(static_cast<float>(threshold)) {}
+
+    bool operator()(const LatticeCoords& base, BrickScratch& s) const {
+        const ParticleGrid& grid = field_.grid;
+        const CubicSplineKernel& kernel = field_.kernel;
+        std::fill(s.values.begin(), s.values.end(), 0.0f);
+        const double support = kernel.support();
+        const float support_squared = kernel.support_squared();
+        const double cell = grid.cell_size();
+        LatticeCoords lo, hi;
+        for (int k = 0; k < 3; ++k) {
+            // One extra cell on each side: rounding of a particle's cell must not drop it from the gather.
+            lo[k] = static_cast<int64_t>(std::floor((double(base[k]) * cube_ - support) / cell)) - 1;
+            hi[k] = static_cast<int64_t>(std::floor((double(base[k] + kBrick) * cube_ + support) / cell)) + 1;
+        }
+        const float inverse_support = 1.0f / kernel.support();
+        grid.for_each_cell_in_box(lo, hi, [&](std::size_t c) {
+            for (std::size_t j = grid.cell_begin(c); j < grid.cell_end(c); ++j) {
+                const float* x = grid.position(j);
+                int64_t first[3], last[3];
+                bool empty = false;
+                for (int k = 0; k < 3; ++k) {
+                    first[k] = std::max<int64_t>(static_cast<int64_t>(std::ceil((double(x[k]) - support) / cube_)), base[k]);
+                    last[k] = std::min<int64_t>(static_cast<int64_t>(std::floor((double(x[k]) + support) / cube_)), base[k] + kBrick);
+                    if (first[k] > last[k]) empty = true;
+                }
+                if (empty) continue;
+                auto fill_axis = [&](std::vector<float>& d2, int k) {
+                    d2.resize(static_cast<std::size_t>(last[k] - first[k] + 1));
+                    for (int64_t g = first[k]; g <= last[k]; ++g) {
+                        const float d = grid_coordinate(g) - x[k];
+                        d2[static_cast<std::size_t>(g - first[k])] = d * d;
+                    }
+                };
+                fill_axis(s.dx2, 0);
+                fill_axis(s.dy2, 1);
+                fill_axis(s.dz2, 2);
+                const float factor = field_.volumes[j] * kernel.value(0.0f);  // V_j * 8/(pi H^3)
+                const int nx = static_cast<int>(s.dx2.size()), ny = static_cast<int>(s.dy2.size()), nz = static_cast<int>(s.dz2.size());
+                const int ox = static_cast<int>(first[0] - base[0]), oy = static_cast<int>(first[1] - base[1]), oz = static_cast<int>(first[2] - base[2]);
+                for (int iz = 0; iz < nz; ++iz) {
+                    for (int iy = 0; iy < ny; ++iy) {
+                        const float dyz = s.dz2[iz] + s.dy2[iy];
+                        if (dyz >= support_squared) continue;
+                        splat_row(&s.values[point_index(ox, oy + iy, oz + iz)], s.dx2.data(), nx, dyz, inverse_support, factor);
+                    }
+                }
+            }
+        });
+        return crosses_threshold(s.values, threshold_);
+    }
+
+private:
+    float grid_coordinate(int64_t g) const { return static_cast<float>(static_cast<double>(g) * cube_); }
+
+    SphField field_;
+    double cube_;
+    float threshold_;
+};
+
+}  // namespace
+
+std::vector<LatticeCoords> bricks_near_particles(const ParticleGrid& grid, double compact_support, double cube_edge, int threads) {
+    std::vector<std::vector<LatticeCoords>> per_thread(static_cast<std::size_t>(threads));
+    const double cell = grid.cell_size();
+    const double margin = compact_support + cube_edge;
+    ParallelErrors errors;
+#pragma omp parallel num_threads(threads)
+    {
+        int thread = 0;
+#ifdef _OPENMP
+        thread = omp_get_thread_num();
+#endif
+        std::vector<LatticeCoords>& mine = per_thread[static_cast<std::size_t>(thread)];
+#pragma omp for schedule(static)
+        for (int64_t cell_index = 0; cell_index < static_cast<int64_t>(grid.num_cells()); ++cell_index)
+            errors.run([&] {
+                const auto c = grid.cell_coords(static_cast<std::size_t>(cell_index));
+                LatticeCoords lo, hi;
+                for (int k = 0; k < 3; ++k) {
+                    lo[k] = floor_div(static_cast<int64_t>(std::floor((double(c[k]) * cell - margin) / cube_edge)), kBrick);
+                    hi[k] = floor_div(static_cast<int64_t>(std::ceil((double(c[k] + 1) * cell + margin) / cube_edge)), kBrick);
+                }
+                for (int64_t z = lo[2]; z <= hi[2]; ++z)
+                    for (int64_t y = lo[1]; y <= hi[1]; ++y)
+                        for (int64_t x = lo[0]; x <= hi[0]; ++x) mine.push_back({x, y, z});
+            });
+    }
+    errors.rethrow();
+    std::vector<LatticeCoords> bricks;
+    for (auto& list : per_thread) bricks.insert(bricks.end(), list.begin(), list.end());
+    std::sort(bricks.begin(), bricks.end(), coords_less);
+    bricks.erase(std::unique(bricks.begin(), bricks.end()), bricks.end());
+    return bricks;
+}
+
+BrickSampler colour_field_sampler(const SphField& field, double cube_edge, double threshold) {
+    return ColourFieldSampler(field, cube_edge, threshold);
+}
+
+}  // namespace meniscus
