@@ -15,9 +15,9 @@ import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 VARIANTS = {
-    "before (25 explicit iterations + restoration)": dict(smoothing_explicit=True, smoothing_iterations=25),
-    "default (64: reach 4.3 r, 2 parts)": {},
-    "25 iterations (reach 2.7 r, 1 part)": dict(smoothing_iterations=25),
+    "default (25 explicit iterations + restoration)": {},
+    "reach 4.28 r (2 parts)": dict(smoothing_reach=4.28),
+    "reach 2.68 r (1 part)": dict(smoothing_reach=2.68),
     "no smoothing": dict(smoothing_iterations=0),
 }
 

@@ -2,7 +2,7 @@
 
     bash bench/reference_venv.sh
     build/venv-bench/bin/python bench/smoothing_scale.py table            # 9 shared frames x c = 0.25/0.5/0.75/1.0
-    build/venv-bench/bin/python bench/smoothing_scale.py flicker --cube 0.5 [--tool pysplashsurf] [--variant today]
+    build/venv-bench/bin/python bench/smoothing_scale.py flicker --cube 0.5 [--tool pysplashsurf] [--variant reach]
     python3 bench/smoothing_scale.py summary                              # the Markdown of bench/results/smoothing/
     python3 bench/smoothing_scale.py meshes --frame hilbert2_7954_particles.vtk --cube 1.0   # PLYs for the renders
     blender -b --factory-startup -P bench/smoothing_render.py -- out.png CAM TARGET SHIFT a.ply b.ply ...
@@ -20,8 +20,8 @@ Measures (analysis/scale_metrics.h; all ratios against each tool's own raw march
   temporal second differences of the height and of its gradient (central differences) where the surface exists in the
   three frames and did not jump by more than 2 r; medians over frames 10-60; N_HS per frame.
 
-Variants of ours: "default" (the pipeline as shipped), "today" (the paper's explicit 25 iterations,
-smoothing_explicit=True: the pipeline before issue 12) or a JSON object of heat_smooth settings (reach in r, parts,
+Variants of ours: "today" (the pipeline's default: the paper's 25 explicit iterations with per-component volume
+restoration), "reach" (the opt-in heat flow, smoothing_reach=4.28: the setting measured in README) or a JSON object of heat_smooth settings (reach in r, parts,
 local_return, volume_correction, grid_return) applied to the pipeline's unsmoothed, decimated mesh and its weights,
 e.g. '{"reach": 4, "parts": 1}'.
 """
@@ -41,6 +41,7 @@ from meniscus import _core  # noqa: E402
 SHARED = ROOT.parent / "shared" / "data" / "splashsurf"
 SEQUENCE = ROOT.parent / "shared" / "data" / "sequence"
 RESULTS = ROOT / "bench" / "results" / "smoothing"
+REACH = 4.28  # smoothing_reach of the "reach" variant (kMeasuredReach, post/heat_smoothing.h)
 FRAMES = sorted(p.name for p in SHARED.glob("*") if p.suffix in (".vtk", ".bgeo"))  # every shared frame
 THIN_TUBES = ("hilbert2_7954_particles.vtk", "hilbert_46843_particles.bgeo")
 CUBES = (0.25, 0.5, 0.75, 1.0)
@@ -94,12 +95,12 @@ def measure(raw_v, raw_t, v, t, radius=R):
 
 
 # ---- runs ----------------------------------------------------------------------------------------------------------
-def run_ours(positions, cube, variant="default", keep_raw=True, threads=0):
+def run_ours(positions, cube, variant="reach", keep_raw=True, threads=0):
     """dict(vertices, triangles, raw_vertices, raw_triangles, seconds, smoothing_seconds, stage_seconds, nhs, counts)."""
     common = dict(particle_radius=R, smoothing_length=SMOOTHING_LENGTH, cube_size=cube, iso_threshold=ISO, threads=threads,
                   keep_raw_mesh=keep_raw)
-    if variant in ("default", "today"):
-        kwargs = dict(smoothing_explicit=True, smoothing_iterations=25) if variant == "today" else {}
+    if variant in ("reach", "today", "default"):  # default: today's pipeline
+        kwargs = dict(smoothing_reach=REACH) if variant == "reach" else {}
         start = time.perf_counter()
         mesh = meniscus.reconstruct(positions, **common, **kwargs)
         seconds = time.perf_counter() - start
@@ -253,7 +254,7 @@ def flicker(args):
         maps.append(height_map(r["vertices"], r["triangles"]))
     result = {"tool": args.tool, "variant": args.variant, "cube": args.cube, "frames": [args.first, args.last], **flicker_of(maps),
               "nhs": nhs, "seconds_median": float(np.median(seconds))}
-    name = args.name or (args.variant if args.variant in ("default", "today") else "custom")
+    name = args.name or (args.variant if args.variant in ("default", "reach", "today") else "custom")
     output = args.output or RESULTS / f"flicker_{args.tool}_{name}_c{args.cube}.json"
     output.parent.mkdir(parents=True, exist_ok=True)
     output.write_text(json.dumps(result, indent=1))
@@ -262,13 +263,13 @@ def flicker(args):
 
 # ---- meshes for renders -------------------------------------------------------------------------------------------
 def meshes(args):
-    """raw / before (the paper's 25 explicit iterations) / ours (default) / pysplashsurf (with --tools) as PLY files."""
+    """raw / before (the paper's 25 explicit iterations) / ours (reach 4.28 r) / pysplashsurf (with --tools) as PLY files."""
     positions = meniscus.read_particles(str(SHARED / args.frame)).positions
     folder = args.output or ROOT / "build" / "smoothing_meshes"
     folder.mkdir(parents=True, exist_ok=True)
     stem = f"{args.frame.split('_particles')[0].split('.')[0]}_c{args.cube}"
     paths = []
-    for variant in ("today", "default"):
+    for variant in ("today", "reach"):
         r = run_ours(positions, args.cube, variant)
         if variant == "today":
             meniscus.Mesh(vertices=r["raw_vertices"], triangles=r["raw_triangles"]).write(str(folder / f"{stem}_raw.ply"))
@@ -292,7 +293,7 @@ def _f(x, spec=".3f"):
 def summary(args):
     folder = args.folder or RESULTS
     rows = json.loads((folder / "table.json").read_text())
-    label = {("meniscus", "default"): "ours", ("meniscus", "today"): "ours before (25 explicit)", ("pysplashsurf", "default"): "pysplashsurf"}
+    label = {("meniscus", "reach"): "ours, reach 4.28 r", ("meniscus", "today"): "ours default (25 explicit)", ("pysplashsurf", "default"): "pysplashsurf"}
     lines = ["## Per frame", "",
              "| frame | c | tool | volume | droplets min | hfL | hfL abs (r) | heat | hf | smoothing s | share | ok |",
              "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
@@ -340,12 +341,12 @@ def main():
     t = sub.add_parser("table")
     t.add_argument("--frames")
     t.add_argument("--cubes")
-    t.add_argument("--tools", default="meniscus:default;meniscus:today;pysplashsurf", help="';'-separated tool[:variant]")
+    t.add_argument("--tools", default="meniscus:reach;meniscus:today;pysplashsurf", help="';'-separated tool[:variant]")
     t.add_argument("--output", type=pathlib.Path)
     t.add_argument("--append", action="store_true", help="keep the rows of other runs in the output")
     f = sub.add_parser("flicker")
     f.add_argument("--tool", default="meniscus")
-    f.add_argument("--variant", default="default")
+    f.add_argument("--variant", default="reach")
     f.add_argument("--name", help="file name part for a JSON variant")
     f.add_argument("--cube", type=float, default=0.5)
     f.add_argument("--first", type=int, default=10)

@@ -135,22 +135,21 @@ std::vector<ParameterSpec> make_schema() {
 
     // ---- smoothing (Sec. 3.2, Eq. 3-9) -------------------------------------------------------------------------
     s.push_back(Spec::count("smoothing_iterations", &P::smoothing_iterations, post).group("smoothing")
-                    .label("Smoothing Iterations").cli("--mesh-smoothing-iters").soft(0, 200)
-                    .help("How far the smoothing reaches, as the number of the paper's smoothing iterations that reach "
-                          "as far at cube size 0.5 (64: about 4.3 particle radii; 0: off). At finer cubes the reach stays "
-                          "the same, so the surface does not change when only the cube size does; at coarser cubes it is "
-                          "what that many iterations reach there. Removes the bumps of individual particles while tubes, "
-                          "sheets and drops keep their volume where they are").done());
+                    .label("Smoothing Iterations").cli("--mesh-smoothing-iters").soft(0, 100)
+                    .help("How many times the surface is smoothed: removes the bumps of individual particles (0: off)")
+                    .done());
     s.push_back(Spec::real("smoothing_strength", &P::smoothing_strength, post).group("smoothing")
                     .label("Smoothing Strength").cli("--mesh-smoothing-strength,--mesh-smoothing-beta")
                     .range(0.0, 1.0, true).depends_on("smoothing_iterations")
-                    .help("How far each smoothing iteration moves a vertex towards its neighbours (1: all the way); "
-                          "the reach goes with the square root of iterations x strength").done());
-    s.push_back(Spec::flag("smoothing_explicit", &P::smoothing_explicit, post).group("smoothing")
-                    .label("Paper Iterations").cli("--mesh-smoothing-explicit").depends_on("smoothing_iterations")
-                    .help("Smooth with the paper's explicit iterations (as splashsurf) instead: each iteration moves a "
-                          "fraction of an edge, so the same count reaches less far the finer the cubes, and thin tubes "
-                          "shrink before the volume is given back per piece").done());
+                    .help("How far each smoothing step moves a vertex towards its neighbours (1: all the way)").done());
+    s.push_back(Spec::real("smoothing_reach", &P::smoothing_reach, post).group("smoothing").label("Smoothing Reach")
+                    .cli("--mesh-smoothing-reach").unit("particle radii").range(0.0, 64.0).soft(0.0, 10.0)
+                    .depends_on("smoothing_iterations")
+                    .help("Off (0): the paper's smoothing iterations. Otherwise a heat flow that reaches this far instead "
+                          "(4.28: as far as 64 iterations at cube size 0.5), the same at every cube size up to 0.5 and "
+                          "growing with the cube above it as the iterations' reach does; tubes, sheets and drops keep "
+                          "their volume where they are instead of shrinking and being given it back per piece. About "
+                          "3x the iterations' cost").done());
     s.push_back(Spec::flag("smoothing_weights", &P::smoothing_weights, post).group("smoothing").label("Keep Splashes")
                     .cli("--mesh-smoothing-weights").depends_on("smoothing_iterations")
                     .help("Smooth flat water fully but thin splashes and drops less, so they keep their shape (feature "
@@ -166,8 +165,7 @@ std::vector<ParameterSpec> make_schema() {
                     .help("Push the feature weights towards 0 and 1 (the paper's smoothstep, Eq. 9)").done());
     s.push_back(Spec::flag("volume_restoration", &P::volume_restoration, post).group("smoothing").label("Keep Volume")
                     .cli("--mesh-smoothing-volume-restoration").depends_on("smoothing_iterations")
-                    .help("Give every piece of water exactly the volume it had before smoothing (the smoothing already "
-                          "keeps it where it is to about 1 %; this makes it exact)").done());
+                    .help("Push the smoothed surface back out so that smoothing does not shrink the water").done());
 
     // ---- normals (Sec. 3.4) -----------------------------------------------------------------------------------
     s.push_back(Spec::flag("normals", &P::normals, post).group("normals").label("Normals").cli("--normals")

@@ -32,9 +32,9 @@ struct PostprocessParams {
     bool mesh_cleanup = false;                 // collapse one-ring neighbours sharing the nearest grid point
     double mesh_cleanup_snap_distance = -1.0;  // only vertices this close to their grid point (multiple of c); < 0: all
     bool decimate_barnacles = true;            // remove single-/double-vertex MC configurations (Sec. 3.3)
-    int smoothing_iterations = 64;             // reach of that many explicit iterations at c = 0.5 (heat_smoothing.h)
+    int smoothing_iterations = 25;             // weighted Laplacian iterations (Eq. 3-5)
     double smoothing_strength = 1.0;           // explicit step scale (the paper's beta)
-    bool smoothing_explicit = false;           // the paper's explicit iterations (Eq. 3-5) instead of the heat flow
+    double smoothing_reach = 0.0;              // > 0: heat flow of this reach in r instead (post/heat_smoothing.h)
     bool smoothing_weights = true;             // feature weights (Sec. 3.2); off: uniform smoothing
     double weights_normalization = 0.0;        // N_HS; 0: automatic
     bool weights_smoothstep = true;            // Eq. 9

@@ -68,19 +68,18 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
     if (post.output_weights) mesh.attributes.push_back({"weights", 1, weights});
     const std::vector<float> smoothing_amount = post.smoothing_weights ? std::move(weights) : std::vector<float>{};
 
-    // Smoothing, remembering the surface it started from: by default a heat flow of a physical reach that returns
-    // its local shrinkage (post/heat_smoothing.h, issue 12), or the paper's explicit iterations (Eq. 3-5).
+    // Smoothing, remembering the surface it started from: the paper's explicit iterations (Eq. 3-5), or on request a
+    // heat flow of a physical reach that returns its local shrinkage where it happened (post/heat_smoothing.h).
     UnsmoothedSurface unsmoothed;
     SmoothedNormals restoration_normals;
-    const bool heat = post.smoothing_iterations > 0 && !post.smoothing_explicit;
+    const bool heat = post.smoothing_iterations > 0 && post.smoothing_reach > 0.0;
     if (post.smoothing_iterations > 0) {
         StageTimer timer(&stats, "smoothing");
         unsmoothed = record_unsmoothed_surface(mesh, threads);
         if (heat) {
             const double radius = surface.particle_radius;
             HeatSmoothingSettings settings;
-            settings.reach = smoothing_reach_of(post.smoothing_iterations, post.smoothing_strength, surface.cube_size,
-                                                kSmoothingCoarseFloor) * radius;
+            settings.reach = smoothing_reach_at(post.smoothing_reach, surface.cube_size) * radius;
             settings.particle_radius = radius;
             settings.volume_correction = post.volume_restoration;
             settings.normal_iterations = restoration_normal_iterations(post);

@@ -1,5 +1,5 @@
-// The default smoothing: heat flow of a physical reach with local volume return (post/heat_smoothing.h), and the
-// measures at a physical scale (analysis/scale_metrics.h).
+// The smoothing of a physical reach (opt-in: smoothing_reach > 0): heat flow with local volume return
+// (post/heat_smoothing.h), and the measures at a physical scale (analysis/scale_metrics.h).
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -77,6 +77,7 @@ PipelineOptions options(double cube, int threads) {
     o.reconstruction = {kRadius, 2.0, cube, 0.6};
     o.execution.threads = threads;
     o.keep_raw_mesh = true;
+    o.postprocess.smoothing_reach = kMeasuredReach;  // the heat flow is opt-in
     return o;
 }
 
@@ -139,15 +140,12 @@ TEST_CASE("heat coefficients keep constants, match the heat kernel, and need ~sq
     }
 }
 
-TEST_CASE("the iteration count means its reach at c = 0.5 at every cube size", "[heat]") {
-    const double at_half = smoothing_reach_of(25, 1.0, 0.5, false);
-    CHECK(at_half == Approx(5.0 * kEdgePerCube * 0.5));
-    CHECK(smoothing_reach_of(25, 1.0, 0.25, false) == at_half);
-    CHECK(smoothing_reach_of(25, 1.0, 1.0, false) == at_half);
-    CHECK(smoothing_reach_of(100, 0.25, 0.5, false) == Approx(at_half));  // iterations x strength
-    CHECK(smoothing_reach_of(0, 1.0, 0.5, false) == 0.0);
-    CHECK(smoothing_reach_of(25, 1.0, 1.0, true) == Approx(2.0 * at_half));  // the coarse floor: explicit steps of this mesh
-    CHECK(smoothing_reach_of(25, 1.0, 0.25, true) == at_half);
+TEST_CASE("the reach is the same up to c = 0.5 and grows with the cube above it", "[heat]") {
+    CHECK(smoothing_reach_at(4.0, 0.25) == 4.0);
+    CHECK(smoothing_reach_at(4.0, 0.5) == 4.0);
+    CHECK(smoothing_reach_at(4.0, 1.0) == Approx(8.0));
+    CHECK(smoothing_reach_at(0.0, 1.0) == 0.0);
+    CHECK(kMeasuredReach == Approx(4.28));
 }
 
 TEST_CASE("heat smoothing: the same physical result for any edge length", "[heat]") {
@@ -184,8 +182,6 @@ TEST_CASE("heat smoothing: the same physical surface at c = 0.25 and c = 0.5 (pa
     const std::vector<float> p = scene(false, false);
     double heat_abs[2], raw_abs[2], hfl_ratio[2], hfl_abs[2];
     int k = 0;
-    // The default iteration count's reach at c = 0.5, the same at c = 0.25 (no floor below the reference cube).
-    const double reach = smoothing_reach_of(PostprocessParams{}.smoothing_iterations, 1.0, kReferenceCube, false);
     for (double cube : {0.25, 0.5}) {
         const PipelineResult r = run(p, options(cube, 2));
         REQUIRE(check_mesh(r.mesh).ok());
@@ -196,7 +192,7 @@ TEST_CASE("heat smoothing: the same physical surface at c = 0.25 and c = 0.5 (pa
         const MeshQuality raw = assess_quality(r.raw_mesh, 2, 2 * kRadius);
         hfl_abs[k] = assess_quality(r.mesh, 2, 2 * kRadius, raw.mean_edge_length).hfl / kRadius;
         hfl_ratio[k] = hfl_abs[k] * kRadius / raw.hfl;
-        CHECK(count_of(r.stats, "smoothing_reach") == Approx(reach).epsilon(0.01));
+        CHECK(count_of(r.stats, "smoothing_reach") == Approx(kMeasuredReach));  // the same at both cube sizes
         ++k;
     }
     INFO("smoothed " << heat_abs[0] << " / " << heat_abs[1] << " r, raw " << raw_abs[0] << " / " << raw_abs[1] << " r; hfL ratio "

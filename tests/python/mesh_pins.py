@@ -21,14 +21,12 @@ PINS = ROOT / "tests" / "data" / "mesh_pins.json"
 FRAMES = sorted(p.name for p in SHARED.glob("*") if p.suffix in (".vtk", ".bgeo"))
 
 FULL = dict(particle_radius=0.025, smoothing_length=2.0, cube_size=0.5, iso_threshold=0.6, mesh_cleanup=False,
-            decimate_barnacles=True, smoothing_iterations=64, smoothing_strength=1.0, smoothing_explicit=False,
-            smoothing_weights=True, weights_normalization=0.0, volume_restoration=True, normals=True,
-            normal_smoothing_iterations=10, sph_normals=False)
+            decimate_barnacles=True, smoothing_iterations=25, smoothing_strength=1.0, smoothing_weights=True,
+            weights_normalization=0.0, volume_restoration=True, normals=True, normal_smoothing_iterations=10,
+            sph_normals=False)
 CASES = {
     "full c=0.5": FULL,
     "full c=1.0": dict(FULL, cube_size=1.0),
-    # The paper's explicit iterations as the pipeline ran them before issue 12 (pins unchanged from then).
-    "paper explicit smoothing c=0.5": dict(FULL, smoothing_iterations=25, smoothing_explicit=True),
     "raw marching cubes c=0.75": dict(FULL, cube_size=0.75, decimate_barnacles=False, smoothing_iterations=0,
                                       normal_smoothing_iterations=0),
     "cleanup, uniform smoothing, SPH normals c=1.0": dict(FULL, cube_size=1.0, mesh_cleanup=True,

@@ -72,9 +72,7 @@ def test_no_barnacle_configuration_left(frame):
 def test_weights_matter_uniform_smoothing_shrinks_droplets(shared):
     positions = meniscus.read_particles(shared / "splashsurf/double_dam_break_frame_26_4732_particles.vtk").positions
     ours = reconstruct(positions)
-    # The paper's explicit iterations (the heat flow returns a droplet's shrinkage locally even without weights).
-    plain = reconstruct(positions, smoothing_explicit=True, smoothing_iterations=25, smoothing_weights=False,
-                        volume_restoration=False)
+    plain = reconstruct(positions, smoothing_weights=False, volume_restoration=False)
     raw = meniscus.assess_quality(ours.raw)
     largest = raw["components"][0][1]
     before = np.array(sorted(droplets(raw, largest)))
@@ -97,11 +95,10 @@ def test_weights_without_restoration_already_keep_droplets(shared):
 
 
 def test_thin_tubes_need_the_restoration(shared):
-    """hilbert2's tubes are three particles across: flat-surface weights smooth them like a flat surface. With the
-    paper's explicit iterations they collapse (the heat flow returns it locally: tests/python/test_smoothing.py)."""
+    """hilbert2's tubes are three particles across: flat-surface weights smooth them like a flat surface."""
     positions = meniscus.read_particles(shared / "splashsurf/hilbert2_7954_particles.vtk").positions
-    without = reconstruct(positions, volume_restoration=False, smoothing_explicit=True)
-    with_restoration = reconstruct(positions, smoothing_explicit=True)
+    without = reconstruct(positions, volume_restoration=False)
+    with_restoration = reconstruct(positions)
     raw_volume = meniscus.assess_quality(without.raw)["volume"]
     assert meniscus.assess_quality(without)["volume"] / raw_volume < 0.8
     assert abs(meniscus.assess_quality(with_restoration)["volume"] / raw_volume - 1.0) < 0.03

@@ -314,10 +314,9 @@ bool grid_average(const std::vector<float>& positions, const std::vector<float>&
 
 }  // namespace
 
-double smoothing_reach_of(int iterations, double beta, double cube_size, bool coarse_floor) {
-    if (iterations <= 0 || !(beta > 0.0)) return 0.0;
-    const double steps = std::sqrt(double(iterations) * beta) * kEdgePerCube;
-    return steps * (coarse_floor ? std::max(kReferenceCube, cube_size) : kReferenceCube);
+double smoothing_reach_at(double reach, double cube_size) {
+    if (!(reach > 0.0)) return 0.0;
+    return reach * std::max(1.0, cube_size / kReferenceCube);
 }
 
 double rms_edge_length(const TriMesh& mesh, const MeshAdjacency& adjacency, int threads) {

@@ -34,17 +34,14 @@ struct MeshAdjacency;
 struct WallConstraints;
 struct UnsmoothedSurface;
 
-// RMS edge length of a decimated marching-cubes mesh per cube edge (1.05-1.09 on the shared frames at c = 0.25-1.0):
-// turns an iteration count into the reach it has at a cube size.
-constexpr double kEdgePerCube = 1.07;
-// The cube size (in r) at which the iteration count keeps its explicit meaning: N iterations reach what N explicit
-// iterations reach at c = 0.5 (splashsurf's and the paper's usual cube size), at every finer cube size too.
+// The cube size (in r) up to which the reach stays what the user set. Above it the reach grows with the cube, as the
+// paper's iterations' reach does (each moves a fraction of an edge): coarse marching cubes alias from frame to frame
+// and need it. Measured on the sequence (slope flicker / pysplashsurf's): c = 1.0: 1.06 at 4 r without the growth,
+// 0.92 at 5.35 r, 0.82 at 8 r; c = 0.75: 0.88 at 4 r, 0.73 at 6 r.
 constexpr double kReferenceCube = 0.5;
-// Whether the pipeline uses the coarse floor of smoothing_reach_of: at cubes coarser than the reference the reach is
-// what the iterations reach explicitly there (as the paper's smoothing does), never less. Measured on the sequence
-// (slope flicker / pysplashsurf's): c = 1.0: 1.06 at 4 r without the floor, 0.92 at 5.35 r, 0.82 at 8 r; c = 0.75:
-// 0.88 at 4 r, 0.73 at 6 r. Coarse marching cubes alias from frame to frame; the floor smooths that as the paper did.
-constexpr bool kSmoothingCoarseFloor = true;
+// The reach of 64 explicit iterations at c = 0.5 (sqrt(64) x the RMS edge of a decimated marching-cubes mesh, 1.07
+// cube edges, 1.05-1.09 on the shared frames at c = 0.25-1.0): the setting the README's figures were measured with.
+constexpr double kMeasuredReach = 8.0 * 1.07 * kReferenceCube;
 // Largest heat time of one part of the flow, in r^2 (a tube of radius 1.5 r keeps most of its radius within one
 // part, so the local return finds it).
 constexpr double kPartTime = 2.5;
@@ -57,10 +54,9 @@ constexpr double kLocalScale = 9.0;
 constexpr double kPositionTolerance = 1e-3;
 constexpr double kReturnTolerance = 1e-2;
 
-// The reach (in r) of `iterations` explicit steps of strength beta at the reference cube size. With a coarse floor,
-// at cube sizes above the reference the reach is never less than what the same steps reach on this mesh
-// (sqrt(iterations * beta) * kEdgePerCube * cube_size).
-double smoothing_reach_of(int iterations, double beta, double cube_size, bool coarse_floor);
+// The reach (in r) the flow runs with at a cube size (in r): `reach` up to kReferenceCube, reach * cube / kReferenceCube
+// above it.
+double smoothing_reach_at(double reach, double cube_size);
 
 // RMS edge length over the mesh's edges (deterministic sum).
 double rms_edge_length(const TriMesh& mesh, const MeshAdjacency& adjacency, int threads);
