@@ -133,6 +133,16 @@ std::vector<ParameterSpec> make_schema() {
                     .automatic(-1.0, "all", 0.5).depends_on("mesh_cleanup")
                     .help("Clean up only vertices this close to a grid point (all vertices when automatic)").done());
 
+    s.push_back(Spec::count("stray_min_particles", &P::stray_min_particles, post).group("mesh")
+                    .label("Stray Min Particles").cli("--stray-min-particles").soft(0, 100)
+                    .help("Remove stray blobs: pieces of the surface made by fewer particles than this (0: keep all). A "
+                          "droplet keeps its particle count from frame to frame, so it stays or goes for the whole "
+                          "sequence").done());
+    s.push_back(Spec::real("stray_min_volume", &P::stray_min_volume, post).group("mesh").label("Stray Min Volume")
+                    .cli("--stray-min-volume").unit("particle volumes").range(0.0, kUnbounded).soft(0.0, 100.0)
+                    .help("Remove stray blobs: pieces of the surface enclosing less than this many particle volumes "
+                          "(4/3 pi r^3 each; 0: keep all)").done());
+
     // ---- smoothing (Sec. 3.2, Eq. 3-9) -------------------------------------------------------------------------
     s.push_back(Spec::count("smoothing_iterations", &P::smoothing_iterations, post).group("smoothing")
                     .label("Smoothing Iterations").cli("--mesh-smoothing-iters").soft(0, 100)

@@ -32,6 +32,8 @@ struct PostprocessParams {
     bool mesh_cleanup = false;                 // collapse one-ring neighbours sharing the nearest grid point
     double mesh_cleanup_snap_distance = -1.0;  // only vertices this close to their grid point (multiple of c); < 0: all
     bool decimate_barnacles = true;            // remove single-/double-vertex MC configurations (Sec. 3.3)
+    int stray_min_particles = 0;               // pieces made by fewer particles are removed; 0: off
+    double stray_min_volume = 0.0;             // pieces enclosing less (in particle volumes) are removed; 0: off
     int smoothing_iterations = 25;             // weighted Laplacian iterations (Eq. 3-5)
     double smoothing_strength = 1.0;           // explicit step scale (the paper's beta)
     bool smoothing_weights = true;             // feature weights (Sec. 3.2); off: uniform smoothing

@@ -9,6 +9,7 @@
 #include "post/mesh_cleanup.h"
 #include "post/normals.h"
 #include "post/smoothing.h"
+#include "post/stray_filter.h"
 #include "post/vertex_guard.h"
 #include "post/volume.h"
 #include "post/weights.h"
@@ -32,6 +33,15 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
     const SphField particles = reconstruction.sph_field();
     TriMesh mesh = std::move(reconstruction.mesh);
     if (options.keep_raw_mesh) result.raw_mesh = mesh;
+
+    // Stray blobs, judged on the marching-cubes mesh by their particle count or enclosed volume (off by default).
+    if (post.stray_min_particles > 0 || post.stray_min_volume > 0.0) {
+        StageTimer timer(&stats, "stray blobs");
+        const StrayRemoval strays = remove_stray_components(mesh, reconstruction, post.stray_min_particles, post.stray_min_volume, threads);
+        stats.set_count("stray_components_removed", static_cast<double>(strays.components));
+        stats.set_count("stray_particles_removed", static_cast<double>(strays.particles));
+        stats.set_count("stray_volume_removed", strays.volume);
+    }
 
     // Mesh cleanup and barnacle decimation (Sec. 3.3): the slivers marching cubes leaves at grid points.
     if (post.mesh_cleanup) {
