@@ -187,6 +187,24 @@ std::vector<ParameterSpec> make_schema() {
                     .help("Store the feature weights as the vertex attribute 'weights' (0 in splashes, 1 in calm "
                           "water), e.g. to shade foam").done());
 
+    s.push_back(Spec::flag("generate_quads", &P::generate_quads, post).group("output").label("Quads")
+                    .cli("--generate-quads")
+                    .help("Merge pairs of nearly coplanar triangles into nearly rectangular quads, for subdividing and "
+                          "remeshing").done());
+    s.push_back(Spec::real("quad_max_edge_diag_ratio", &P::quad_max_edge_diag_ratio, post).group("output")
+                    .label("Quad Edge/Diagonal Ratio").cli("--quad-max-edge-diag-ratio").range(1.0, kUnbounded)
+                    .soft(1.0, 3.0).depends_on("generate_quads")
+                    .help("Largest ratio of a quad's edge to its diagonal (the inverse is the smallest): lower makes "
+                          "squarer quads and fewer of them").done());
+    s.push_back(Spec::real("quad_max_normal_angle", &P::quad_max_normal_angle, post).group("output")
+                    .label("Quad Max Fold").cli("--quad-max-normal-angle").unit("degrees").range(0.0, 180.0)
+                    .depends_on("generate_quads")
+                    .help("Largest angle between the normals of two triangles merged into a quad").done());
+    s.push_back(Spec::real("quad_max_interior_angle", &P::quad_max_interior_angle, post).group("output")
+                    .label("Quad Max Corner").cli("--quad-max-interior-angle").unit("degrees").range(0.0, 180.0)
+                    .depends_on("generate_quads")
+                    .help("Largest angle at any corner of a quad").done());
+
     // ---- container (splashsurf's boxes) ------------------------------------------------------------------------
     using C = ContainerParams;
     constexpr auto container = &Parameters::container;

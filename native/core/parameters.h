@@ -44,6 +44,10 @@ struct PostprocessParams {
     bool normals = true;                       // area-weighted vertex normals
     int normal_smoothing_iterations = 10;      // Eq. 12
     bool sph_normals = false;                  // normals from the colour-field gradient instead
+    bool generate_quads = false;               // merge triangle pairs into quads (post/quads.h)
+    double quad_max_edge_diag_ratio = 1.75;    // each quad edge / diagonal within [1/this, this]
+    double quad_max_normal_angle = 10.0;       // degrees between the two triangles' normals
+    double quad_max_interior_angle = 135.0;    // degrees, at each corner of the quad
 };
 
 struct ExecutionOptions {

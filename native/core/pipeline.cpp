@@ -8,6 +8,7 @@
 #include "post/decimation.h"
 #include "post/mesh_cleanup.h"
 #include "post/normals.h"
+#include "post/quads.h"
 #include "post/smoothing.h"
 #include "post/stray_filter.h"
 #include "post/vertex_guard.h"
@@ -115,6 +116,13 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         StageTimer timer(&stats, "attributes");
         for (Attribute& transferred : transfer_attributes(particles, attributes, mesh.vertices, threads))
             mesh.attributes.push_back(std::move(transferred));
+    }
+
+    // Quads last: merging faces moves no vertex, so normals and attributes stay as they are.
+    if (post.generate_quads) {
+        StageTimer timer(&stats, "quads");
+        const QuadCriteria criteria{post.quad_max_edge_diag_ratio, post.quad_max_normal_angle, post.quad_max_interior_angle};
+        stats.set_count("quads", static_cast<double>(merge_triangles_into_quads(mesh, criteria, threads)));
     }
 
     // The last line of defence for the host application (post/vertex_guard.h).
