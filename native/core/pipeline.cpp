@@ -58,10 +58,14 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         stats.set_count("decimated_configurations", static_cast<double>(removed));
     }
 
-    // From here on the topology stays as it is: one adjacency serves smoothing, restoration and normals. Decimation
-    // hands over the one its last pass built, when it could (rows for every vertex of a non-empty mesh).
+    // From here on the topology stays as it is: one adjacency serves smoothing, restoration and normals, built only
+    // when one of them runs. Decimation hands over the one its last pass built, when it could (rows for every vertex
+    // of a non-empty mesh).
+    const bool needs_adjacency = post.smoothing_iterations > 0 || (post.normals && !post.sph_normals);
     const bool handed_over = mesh.num_vertices() > 0 && adjacency.vertex_triangles.rows() == mesh.num_vertices();
-    if (!handed_over) {
+    if (!needs_adjacency) {
+        adjacency = MeshAdjacency{};  // decimation's, if any: not kept for nothing
+    } else if (!handed_over) {
         StageTimer timer(&stats, "adjacency");
         adjacency = build_adjacency(mesh, threads);
     }
