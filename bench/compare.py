@@ -80,7 +80,8 @@ def child(args):
                 # Reconstruction alone: every post-processing stage off (the defaults run the whole pipeline).
                 kwargs = full if args.mode == "full" else dict(decimate_barnacles=False, smoothing_iterations=0,
                                                                normals=False, normal_smoothing_iterations=0)
-                mesh = meniscus.reconstruct(positions, RADIUS, SMOOTHING_LENGTH, args.cube, ISO, threads=args.threads, **kwargs)
+                mesh = meniscus.reconstruct(positions, particle_radius=RADIUS, smoothing_length=SMOOTHING_LENGTH,
+                                            cube_size=args.cube, iso_threshold=ISO, threads=args.threads, **kwargs)
                 return mesh, mesh.vertices, mesh.triangles, mesh.normals
         else:
             import pysplashsurf

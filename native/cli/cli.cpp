@@ -33,6 +33,7 @@
 #include "pipeline.h"
 #include "base/platform.h"
 #include "analysis/quality.h"
+#include "sph/particle_box.h"
 #include "surface/reconstruction.h"
 
 namespace fs = std::filesystem;
@@ -160,6 +161,7 @@ struct ReconstructArgs {
     bool frames_in_parallel = false;  // --mt-files
     bool threads_per_frame = true;    // --mt-particles
     bool double_precision = false;    // -d: accepted from splashsurf command lines, no effect (see add_compatibility_flags)
+    bool raw_normals = false;         // --output-raw-normals: refused when on (not written)
 };
 
 // splashsurf spells a switch --normals=on; accepted the same here, and a bare --normals means on.
@@ -344,6 +346,13 @@ void add_compatibility_flags(CLI::App& command, ReconstructArgs& args) {
     static double rest_density = 1000.0, subdomain_cubes = 64;
     command.add_option("--rest-density", rest_density, "No effect: the rest density cancels out of the colour field")->group(group);
     command.add_option("--subdomain-cubes", subdomain_cubes, "No effect: Meniscus's bricks are 32 cubes wide")->group(group);
+    static bool keep_verts = false, check_debug = false;
+    add_switch(command, "--keep-verts", keep_verts, "No effect: decimation never leaves vertices without faces")->group(group);
+    add_switch(command, "--check-mesh-debug", check_debug, "No effect: the details of a failed check are in the --stats JSON")
+        ->group(group);
+    add_switch(command, "--output-raw-normals", args.raw_normals,
+               "Not supported: only the smoothed normals are written (refused when on)")->group(group);
+    command.add_flag("-v", "No effect: the summary is always printed (-q silences it)")->group(group);
 }
 
 // validate() names parameters as the schema does (mesh_aabb_min); here they are called by their flags.
@@ -367,6 +376,9 @@ void validate_in_flag_names(const Parameters& parameters) {
 }
 
 int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
+    if (args.raw_normals)
+        throw InputError("--output-raw-normals=on is not supported: Meniscus writes the smoothed normals only (leave it off, "
+                         "or set --normals-smoothing-iters 0 for unsmoothed normals)");
     validate_in_flag_names(args.parameters);
     if (args.output.empty()) args.output = default_output_name(args.input);
     args.output = in_output_dir(args.output_dir, args.output);
@@ -547,6 +559,46 @@ int inspect_command(const std::string& mesh_path, const std::string& raw_path, c
     return quality.check.ok() ? 0 : 1;
 }
 
+struct ConvertArgs {
+    std::string particles, mesh, output;
+    bool overwrite = false;
+    std::vector<double> domain_min, domain_max;
+};
+
+// splashsurf's convert: particles (any format read_particles reads) to VTK, PLY or XYZ, optionally only those inside
+// --domain-min/max; meshes (PLY, OBJ, VTK) to PLY, OBJ or VTK.
+int convert_command(const ConvertArgs& args) {
+    if (args.particles.empty() == args.mesh.empty()) throw InputError("convert takes one input: --particles FILE or --mesh FILE");
+    if (args.domain_min.empty() != args.domain_max.empty())
+        throw InputError("--domain-min and --domain-max go together (each three numbers: x y z)");
+    if (!args.domain_min.empty() && !args.mesh.empty()) throw InputError("--domain-min/--domain-max apply to --particles only");
+    std::error_code error;
+    if (fs::exists(path_from_utf8(args.output), error) && !args.overwrite)
+        throw InputError(args.output + " exists; pass --overwrite to replace it");
+    if (!args.mesh.empty()) {
+        const TriMesh mesh = read_mesh(args.mesh);
+        write_mesh(mesh, args.output);
+        std::printf("%s: %zu vertices, %zu triangles -> %s\n", args.mesh.c_str(), mesh.num_vertices(), mesh.num_triangles(),
+                    args.output.c_str());
+        return 0;
+    }
+    ParticleData particles = read_particles(args.particles);
+    std::size_t dropped = 0;
+    if (!args.domain_min.empty()) {
+        const Vector3 lo{args.domain_min[0], args.domain_min[1], args.domain_min[2]};
+        const Vector3 hi{args.domain_max[0], args.domain_max[1], args.domain_max[2]};
+        for (int k = 0; k < 3; ++k)
+            if (!(lo[k] < hi[k]))
+                throw InputError("--domain-min must be below --domain-max in every coordinate, got " + format_number(lo[k]) +
+                                 " and " + format_number(hi[k]) + " in " + "xyz"[k]);
+        dropped = keep_particles_in_box(particles, lo, hi);
+    }
+    write_particles(particles, args.output);
+    std::printf("%s: %zu particles (%zu outside the domain dropped) -> %s\n", args.particles.c_str(), particles.size(), dropped,
+                args.output.c_str());
+    return 0;
+}
+
 }  // namespace
 
 namespace meniscus {
@@ -596,6 +648,17 @@ int run_cli(const std::vector<std::string>& arguments, const CliHooks& hooks) {
                         "Particle radius: adds the bumpiness at L = 2 r (hfL, with --raw its ratio; Taubin passes from the raw "
                         "mesh's mean edge length) and its heat-kernel variant");
 
+    ConvertArgs convert_args;
+    CLI::App* convert = app.add_subcommand("convert", "Convert particle or mesh files between formats (as splashsurf convert)");
+    convert->add_option("--particles", convert_args.particles, "Particle file to read (every format reconstruct reads)");
+    convert->add_option("--mesh", convert_args.mesh, "Mesh file to read (.ply, .obj, .vtk)");
+    convert->add_option("-o", convert_args.output, "Output file: particles to .vtk, .ply, .xyz; meshes to .ply, .obj, .vtk")->required();
+    convert->add_flag("--overwrite", convert_args.overwrite, "Replace an existing output file");
+    convert->add_option("--domain-min", convert_args.domain_min, "Lower corner of the box of particles to keep")->expected(3)->type_name("X Y Z");
+    convert->add_option("--domain-max", convert_args.domain_max, "Upper corner of the box of particles to keep")->expected(3)->type_name("X Y Z");
+    static bool convert_quiet = false;
+    convert->add_flag("-q,--quiet", convert_quiet, "Accepted for splashsurf's command lines");
+
     // splashsurf's command lines write short options as -r=0.025; CLI11 reads that as the value "=0.025".
     std::vector<std::string> split;
     for (const auto& argument : arguments) {
@@ -616,6 +679,7 @@ int run_cli(const std::vector<std::string>& arguments, const CliHooks& hooks) {
     try {
         if (*reconstruct) return reconstruct_command(args, hooks);
         if (*inspect) return inspect_command(mesh_path, raw_path, json_path, inspect_radius, inspect_threads);
+        if (*convert) return convert_command(convert_args);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return 2;

@@ -133,6 +133,16 @@ std::vector<ParameterSpec> make_schema() {
                     .automatic(-1.0, "all", 0.5).depends_on("mesh_cleanup")
                     .help("Clean up only vertices this close to a grid point (all vertices when automatic)").done());
 
+    s.push_back(Spec::count("stray_min_particles", &P::stray_min_particles, post).group("mesh")
+                    .label("Stray Min Particles").cli("--stray-min-particles").soft(0, 100)
+                    .help("Remove stray blobs: pieces of the surface made by fewer particles than this (0: keep all). A "
+                          "droplet keeps its particle count from frame to frame, so it stays or goes for the whole "
+                          "sequence").done());
+    s.push_back(Spec::real("stray_min_volume", &P::stray_min_volume, post).group("mesh").label("Stray Min Volume")
+                    .cli("--stray-min-volume").unit("particle volumes").range(0.0, kUnbounded).soft(0.0, 100.0)
+                    .help("Remove stray blobs: pieces of the surface enclosing less than this many particle volumes "
+                          "(4/3 pi r^3 each; 0: keep all)").done());
+
     // ---- smoothing (Sec. 3.2, Eq. 3-9) -------------------------------------------------------------------------
     s.push_back(Spec::count("smoothing_iterations", &P::smoothing_iterations, post).group("smoothing")
                     .label("Smoothing Iterations").cli("--mesh-smoothing-iters").soft(0, 100)
@@ -184,6 +194,24 @@ std::vector<ParameterSpec> make_schema() {
                     .cli("--output-smoothing-weights")
                     .help("Store the feature weights as the vertex attribute 'weights' (0 in splashes, 1 in calm "
                           "water), e.g. to shade foam").done());
+
+    s.push_back(Spec::flag("generate_quads", &P::generate_quads, post).group("output").label("Quads")
+                    .cli("--generate-quads")
+                    .help("Merge pairs of nearly coplanar triangles into nearly rectangular quads, for subdividing and "
+                          "remeshing").done());
+    s.push_back(Spec::real("quad_max_edge_diag_ratio", &P::quad_max_edge_diag_ratio, post).group("output")
+                    .label("Quad Edge/Diagonal Ratio").cli("--quad-max-edge-diag-ratio").range(1.0, kUnbounded)
+                    .soft(1.0, 3.0).depends_on("generate_quads")
+                    .help("Largest ratio of a quad's edge to its diagonal (the inverse is the smallest): lower makes "
+                          "squarer quads and fewer of them").done());
+    s.push_back(Spec::real("quad_max_normal_angle", &P::quad_max_normal_angle, post).group("output")
+                    .label("Quad Max Fold").cli("--quad-max-normal-angle").unit("degrees").range(0.0, 180.0)
+                    .depends_on("generate_quads")
+                    .help("Largest angle between the normals of two triangles merged into a quad").done());
+    s.push_back(Spec::real("quad_max_interior_angle", &P::quad_max_interior_angle, post).group("output")
+                    .label("Quad Max Corner").cli("--quad-max-interior-angle").unit("degrees").range(0.0, 180.0)
+                    .depends_on("generate_quads")
+                    .help("Largest angle at any corner of a quad").done());
 
     // ---- container (splashsurf's boxes) ------------------------------------------------------------------------
     using C = ContainerParams;

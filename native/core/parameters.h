@@ -32,6 +32,8 @@ struct PostprocessParams {
     bool mesh_cleanup = false;                 // collapse one-ring neighbours sharing the nearest grid point
     double mesh_cleanup_snap_distance = -1.0;  // only vertices this close to their grid point (multiple of c); < 0: all
     bool decimate_barnacles = true;            // remove single-/double-vertex MC configurations (Sec. 3.3)
+    int stray_min_particles = 0;               // pieces made by fewer particles are removed; 0: off
+    double stray_min_volume = 0.0;             // pieces enclosing less (in particle volumes) are removed; 0: off
     int smoothing_iterations = 25;             // weighted Laplacian iterations (Eq. 3-5)
     double smoothing_strength = 1.0;           // explicit step scale (the paper's beta)
     double smoothing_reach = 0.0;              // > 0: heat flow of this reach in r instead (post/heat_smoothing.h)
@@ -43,6 +45,10 @@ struct PostprocessParams {
     bool normals = true;                       // area-weighted vertex normals
     int normal_smoothing_iterations = 10;      // Eq. 12
     bool sph_normals = false;                  // normals from the colour-field gradient instead
+    bool generate_quads = false;               // merge triangle pairs into quads (post/quads.h)
+    double quad_max_edge_diag_ratio = 1.75;    // each quad edge / diagonal within [1/this, this]
+    double quad_max_normal_angle = 10.0;       // degrees between the two triangles' normals
+    double quad_max_interior_angle = 135.0;    // degrees, at each corner of the quad
 };
 
 struct ExecutionOptions {

@@ -9,7 +9,9 @@
 #include "post/heat_smoothing.h"
 #include "post/mesh_cleanup.h"
 #include "post/normals.h"
+#include "post/quads.h"
 #include "post/smoothing.h"
+#include "post/stray_filter.h"
 #include "post/vertex_guard.h"
 #include "post/volume.h"
 #include "post/weights.h"
@@ -34,6 +36,15 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
     TriMesh mesh = std::move(reconstruction.mesh);
     if (options.keep_raw_mesh) result.raw_mesh = mesh;
 
+    // Stray blobs, judged on the marching-cubes mesh by their particle count or enclosed volume (off by default).
+    if (post.stray_min_particles > 0 || post.stray_min_volume > 0.0) {
+        StageTimer timer(&stats, "stray blobs");
+        const StrayRemoval strays = remove_stray_components(mesh, reconstruction, post.stray_min_particles, post.stray_min_volume, threads);
+        stats.set_count("stray_components_removed", static_cast<double>(strays.components));
+        stats.set_count("stray_particles_removed", static_cast<double>(strays.particles));
+        stats.set_count("stray_volume_removed", strays.volume);
+    }
+
     // Mesh cleanup and barnacle decimation (Sec. 3.3): the slivers marching cubes leaves at grid points.
     if (post.mesh_cleanup) {
         StageTimer timer(&stats, "mesh cleanup");
@@ -48,10 +59,14 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         stats.set_count("decimated_configurations", static_cast<double>(removed));
     }
 
-    // From here on the topology stays as it is: one adjacency serves smoothing, restoration and normals. Decimation
-    // hands over the one its last pass built, when it could (rows for every vertex of a non-empty mesh).
+    // From here on the topology stays as it is: one adjacency serves smoothing, restoration and normals, built only
+    // when one of them runs. Decimation hands over the one its last pass built, when it could (rows for every vertex
+    // of a non-empty mesh).
+    const bool needs_adjacency = post.smoothing_iterations > 0 || (post.normals && !post.sph_normals);
     const bool handed_over = mesh.num_vertices() > 0 && adjacency.vertex_triangles.rows() == mesh.num_vertices();
-    if (!handed_over) {
+    if (!needs_adjacency) {
+        adjacency = MeshAdjacency{};  // decimation's, if any: not kept for nothing
+    } else if (!handed_over) {
         StageTimer timer(&stats, "adjacency");
         adjacency = build_adjacency(mesh, threads);
     }
@@ -126,6 +141,13 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         StageTimer timer(&stats, "attributes");
         for (Attribute& transferred : transfer_attributes(particles, attributes, mesh.vertices, threads))
             mesh.attributes.push_back(std::move(transferred));
+    }
+
+    // Quads last: merging faces moves no vertex, so normals and attributes stay as they are.
+    if (post.generate_quads) {
+        StageTimer timer(&stats, "quads");
+        const QuadCriteria criteria{post.quad_max_edge_diag_ratio, post.quad_max_normal_angle, post.quad_max_interior_angle};
+        stats.set_count("quads", static_cast<double>(merge_triangles_into_quads(mesh, criteria, threads)));
     }
 
     // The last line of defence for the host application (post/vertex_guard.h).

@@ -130,6 +130,28 @@ def test_each_parameter_edit_reaches_the_core():
     settings.weights_normalization_auto = True
 
 
+def test_quads_and_stray_removal_reach_the_mesh():
+    scene.frame_set(30)
+    triangles_only = len(surface.data.polygons)
+    settings.generate_quads = True
+    try:
+        check(not settings.status_is_error, settings.status)
+        sizes = np.zeros(len(surface.data.polygons), dtype=np.int32)
+        surface.data.polygons.foreach_get("loop_total", sizes)
+        check(set(np.unique(sizes)) == {3, 4} and (sizes == 4).sum() > 100, f"face sizes {np.bincount(sizes)}")
+        # Each quad replaced two triangles.
+        check(len(sizes) + (sizes == 4).sum() == triangles_only, (len(sizes), (sizes == 4).sum(), triangles_only))
+    finally:
+        settings.generate_quads = False
+    before = len(surface.data.vertices)
+    settings.stray_min_particles = 50  # the splash droplets of the sample frame go, the pools stay
+    try:
+        check(not settings.status_is_error, settings.status)
+        check(0 < len(surface.data.vertices) < before, (len(surface.data.vertices), before))
+    finally:
+        settings.stray_min_particles = 0
+
+
 def test_weights_and_particle_attributes_become_mesh_attributes():
     settings.output_weights = True
     settings.attribute_names = "id, foam"  # 'id' is in the sample files, 'foam' is not

@@ -2,7 +2,10 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
+#include "io/io.h"
+#include "mesh/topology.h"
 #include "post/quads.h"
+#include "reader_checks.h"
 
 using namespace meniscus;
 
@@ -76,4 +79,24 @@ TEST_CASE("quads are the same for any thread count", "[quads]") {
     merge_triangles_into_quads(two, QuadCriteria{}, 2);
     REQUIRE(one.quads == two.quads);
     REQUIRE(one.triangles == two.triangles);
+}
+
+TEST_CASE("quad meshes are written as PLY, OBJ and VTK faces of four corners and checked as closed", "[quads][io]") {
+    TriMesh mesh = grid(4);
+    merge_triangles_into_quads(mesh, QuadCriteria{}, 1);
+    REQUIRE(mesh.num_quads() == 16);
+    REQUIRE(mesh.num_triangles() == 0);
+    test::TempDir dir("quads");
+    for (const char* name : {"grid.ply", "grid.obj", "grid.vtk"}) {
+        const std::string path = dir.file(name);
+        write_mesh(mesh, path);
+        // The readers fan polygons into triangles: a quad comes back as its two halves, its corners in order.
+        test::require_same_mesh(triangulated(mesh), read_mesh(path), false);
+    }
+    // check_mesh judges a quad mesh by its triangulation: the open grid has a boundary, the quads no inner holes.
+    const MeshCheck quads = check_mesh(mesh), triangles = check_mesh(triangulated(mesh));
+    CHECK(quads.summary() == triangles.summary());
+    TriMesh broken = mesh;
+    broken.quads[5] = 1000;
+    REQUIRE_THROWS_WITH(write_mesh(broken, dir.file("broken.ply")), Catch::Contains("quad 1 refers to vertex 1000"));
 }

@@ -4,6 +4,7 @@ import pathlib
 import shutil
 import subprocess
 
+import numpy as np
 import pytest
 
 import meniscus
@@ -125,6 +126,21 @@ def test_command_lines_from_splashsurfs_readme_run_unchanged(cli, shared, tmp_pa
          "out/canyon_13353401_particles_surface.vtk"),
         ("reconstruct canyon_13353401_particles.xyz -r=0.011 -c=1.5 -l=2.0 -t=0.6 --subdomain-grid=on",
          "canyon_13353401_particles_surface.vtk"),
+        # The README's "full invocation" (on the same file) ...
+        ("reconstruct canyon_13353401_particles.xyz -r=0.011 -l=2.0 -c=0.5 -t=0.6 --mesh-smoothing-weights=on "
+         "--mesh-smoothing-iters=15 --normals=on --normals-smoothing-iters=10 -o full.vtk", "full.vtk"),
+        # ... and every option of its reference list that a pipeline user sets, in its own spelling.
+        ("reconstruct canyon_13353401_particles.xyz -r=0.011 -l=2.0 -c=0.75 -t=0.6 -n 2 --mt-particles=on -d=off "
+         "--rest-density 1000 --subdomain-grid=on --subdomain-cubes 64 --mesh-cleanup=on --mesh-cleanup-snap-dist 0.3 "
+         "--decimate-barnacles=on --keep-verts=off --mesh-smoothing-iters 25 --mesh-smoothing-weights=on "
+         "--mesh-smoothing-weights-normalization 13 --output-smoothing-weights=on --normals=on --sph-normals=off "
+         "--normals-smoothing-iters 10 --output-raw-normals=off --generate-quads=on --quad-max-edge-diag-ratio 1.75 "
+         "--quad-max-normal-angle 10 --quad-max-interior-angle 135 --particle-aabb-min -1 -1 -1 --particle-aabb-max 9 9 9 "
+         "--check-mesh=on --check-mesh-closed=on --check-mesh-manifold=on --check-mesh-orientation=on "
+         "--check-mesh-debug=off --output-raw-mesh=off -v -o quads.ply", "quads.ply"),
+        ("convert --particles canyon_13353401_particles.xyz -o converted.vtk --overwrite --domain-min -1 -1 -1 "
+         "--domain-max 9 9 9", "converted.vtk"),
+        ("convert --mesh quads.ply -o quads.obj", "quads.obj"),
     ]:
         result = subprocess.run([cli, *line.split()], capture_output=True, text=True, cwd=tmp_path)
         assert result.returncode == 0, f"{line}\n{result.stderr}"
@@ -145,3 +161,46 @@ def test_frames_in_parallel_give_the_same_meshes(cli, shared, tmp_path):
     assert report["parameters"]["frames_in_parallel"] == 2 and [f["frame"] for f in report["frames"]] == [30, 31, 32]
     for number in (30, 31, 32):
         assert (tmp_path / f"a_{number}.ply").read_bytes() == (tmp_path / f"b_{number}.ply").read_bytes()
+
+
+def test_convert_keeps_particles_and_attributes_and_drops_those_outside_the_domain(cli, shared, tmp_path):
+    source = shared / "splashsurf/bunny_frame_14_7705_particles.vtk"
+    original = meniscus.read_particles(source)
+    for extension in ("vtk", "ply"):
+        out = tmp_path / f"all.{extension}"
+        assert run(cli, "convert", "--particles", source, "-o", out).returncode == 0
+        back = meniscus.read_particles(out)
+        assert (back.positions == original.positions).all()
+        assert set(back.attributes) == set(original.attributes)
+        for name, values in original.attributes.items():
+            assert (back.attributes[name] == values).all(), name
+    out = tmp_path / "all.xyz"
+    assert run(cli, "convert", "--particles", source, "-o", out).returncode == 0
+    assert (meniscus.read_particles(out).positions == original.positions).all()
+    # The domain: the lower half in x, bounds included; the same count as numpy's.
+    middle = float(np.median(original.positions[:, 0]))
+    result = run(cli, "convert", "--particles", source, "-o", tmp_path / "half.vtk", "--domain-min", -10, -10, -10,
+                 "--domain-max", middle, 10, 10)
+    assert result.returncode == 0, result.stderr
+    inside = original.positions[:, 0] <= np.float32(middle)
+    half = meniscus.read_particles(tmp_path / "half.vtk")
+    assert len(half.positions) == inside.sum() and (half.positions == original.positions[inside]).all()
+    assert f"{(~inside).sum()} outside the domain dropped" in result.stdout
+    # An existing output is not replaced without --overwrite; a reversed box is named.
+    refused = run(cli, "convert", "--particles", source, "-o", tmp_path / "half.vtk")
+    assert refused.returncode != 0 and "--overwrite" in refused.stderr
+    reversed_box = run(cli, "convert", "--particles", source, "-o", tmp_path / "r.vtk", "--domain-min", 1, 0, 0,
+                       "--domain-max", 0, 1, 1)
+    assert reversed_box.returncode != 0 and "--domain-min must be below --domain-max" in reversed_box.stderr
+
+
+def test_quads_are_written_as_four_corner_faces_and_the_mesh_checks_closed(cli, shared, tmp_path):
+    out = tmp_path / "quads.obj"
+    stats = tmp_path / "stats.json"
+    result = run(cli, "reconstruct", shared / "splashsurf/bunny_frame_14_7705_particles.vtk", "-r", 0.025, "-c", 0.75,
+                 "--generate-quads", "--check-mesh", "--stats", stats, "-o", out, "-q")
+    assert result.returncode == 0, result.stderr
+    frame = json.loads(stats.read_text())["frames"][0]
+    quads = sum(1 for line in out.read_text().splitlines() if line.startswith("f ") and len(line.split()) == 5)
+    assert quads == frame["counts"]["quads"] > 1000
+    assert frame["check"]["ok"]

@@ -6,7 +6,9 @@
 #include <cerrno>
 #include <cstdio>
 #include <filesystem>
+#include <initializer_list>
 #include <memory>
+#include <utility>
 
 #include "io/io_util.h"
 #include "io/mesh_writer.h"
@@ -203,18 +205,46 @@ ParticleData read_particles(const std::string& path) { return io_detail::read_pa
 
 TriMesh read_mesh(const std::string& path) { return io_detail::read_mesh_from_bytes(path, io_detail::read_file(path)); }
 
+namespace {
+
+template <class Data>
+using Writer = void (*)(const Data&, const std::string&);
+
+// The writer for the path's extension; an InputError listing the supported ones when there is none.
+template <class Data>
+Writer<Data> writer_for(const std::string& path, const char* what, std::initializer_list<std::pair<const char*, Writer<Data>>> writers) {
+    const std::string ext = io_detail::lower_extension(path);
+    std::string supported;
+    for (const auto& [extension, writer] : writers) {
+        if (ext == extension) return writer;
+        supported += std::string(supported.empty() ? "" : ", ") + extension;
+    }
+    throw InputError(std::string("cannot write ") + what + " to " + path + ": unknown extension " +
+                     (ext.empty() ? std::string("(none)") : "'" + ext + "'") + " (supported: " + supported + ")");
+}
+
+}  // namespace
+
 void write_mesh(const TriMesh& mesh, const std::string& path) {
-    std::string ext = io_detail::lower_extension(path);
-    if (ext != ".ply" && ext != ".obj" && ext != ".vtk")
-        throw InputError("cannot write mesh to " + path + ": unknown extension " +
-                         (ext.empty() ? std::string("(none)") : "'" + ext + "'") + " (supported: .ply, .obj, .vtk)");
+    const Writer<TriMesh> write = writer_for<TriMesh>(
+        path, "mesh", {{".ply", io_detail::write_ply_mesh}, {".obj", io_detail::write_obj_mesh}, {".vtk", io_detail::write_vtk_mesh}});
     io_detail::validate_mesh(mesh, path);
-    if (ext == ".ply")
-        io_detail::write_ply_mesh(mesh, path);
-    else if (ext == ".obj")
-        io_detail::write_obj_mesh(mesh, path);
-    else
-        io_detail::write_vtk_mesh(mesh, path);
+    write(mesh, path);
+}
+
+void write_particles(const ParticleData& particles, const std::string& path) {
+    const Writer<ParticleData> write = writer_for<ParticleData>(
+        path, "particles",
+        {{".vtk", io_detail::write_vtk_particles}, {".ply", io_detail::write_ply_particles}, {".xyz", io_detail::write_xyz_particles}});
+    if (particles.positions.size() % 3 != 0)
+        throw InputError("cannot write particles to " + path + ": positions has " + std::to_string(particles.positions.size()) +
+                         " floats, not a multiple of 3");
+    for (const Attribute& a : particles.attributes)
+        if (a.components < 1 || a.values.size() != particles.size() * static_cast<std::size_t>(a.components))
+            throw InputError("cannot write particles to " + path + ": attribute '" + a.name + "' has " + std::to_string(a.values.size()) +
+                             " values with " + std::to_string(a.components) + " components for " + std::to_string(particles.size()) +
+                             " particles");
+    write(particles, path);
 }
 
 }  // namespace meniscus

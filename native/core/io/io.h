@@ -27,6 +27,11 @@ ParticleData read_particles(const std::string& path);
 // in formats/ply.cpp). An invalid mesh or an unknown extension is an InputError; a failed write a FormatError.
 void write_mesh(const TriMesh& mesh, const std::string& path);
 
+// Writes particles and their attributes; the format follows the extension: .vtk (legacy, binary, an unstructured grid
+// of vertex cells, as splashsurf and ParaView read it), .ply (binary vertices with every attribute), .xyz (raw float32
+// positions only). Sizes that disagree or an unknown extension are an InputError; a failed write a FormatError.
+void write_particles(const ParticleData& particles, const std::string& path);
+
 // Reads a triangle mesh such as write_mesh writes (PLY binary/ASCII, OBJ, legacy VTK POLYDATA binary/ASCII; chosen by
 // the 'ply' or '# vtk DataFile' header, else by the extension), with normals and attributes where present; polygons
 // are fanned into triangles.

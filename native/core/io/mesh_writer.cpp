@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <charconv>
 #include <filesystem>
+#include <tuple>
 
 #include "base/decimal.h"
 #include "base/platform.h"
@@ -76,10 +77,12 @@ void validate_mesh(const TriMesh& mesh, const std::string& path) {
         if (a.components < 1 || a.values.size() != nv * static_cast<std::size_t>(a.components))
             bad("attribute '" + a.name + "' has " + std::to_string(a.values.size()) + " values with " +
                 std::to_string(a.components) + " components for " + std::to_string(nv) + " vertices");
-    for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
-        if (mesh.triangles[i] < 0 || static_cast<std::size_t>(mesh.triangles[i]) >= nv)
-            bad("triangle " + std::to_string(i / 3) + " refers to vertex " + std::to_string(mesh.triangles[i]) +
-                " but there are " + std::to_string(nv) + " vertices");
+    if (mesh.quads.size() % 4 != 0) bad("quads has " + std::to_string(mesh.quads.size()) + " indices, not a multiple of 4");
+    for (const auto& [faces, corners, kind] : {std::tuple(&mesh.triangles, 3, "triangle"), std::tuple(&mesh.quads, 4, "quad")})
+        for (std::size_t i = 0; i < faces->size(); ++i)
+            if ((*faces)[i] < 0 || static_cast<std::size_t>((*faces)[i]) >= nv)
+                bad(std::string(kind) + " " + std::to_string(i / corners) + " refers to vertex " + std::to_string((*faces)[i]) +
+                    " but there are " + std::to_string(nv) + " vertices");
 }
 
 

@@ -8,6 +8,8 @@
 #include <vector>
 
 #include "io/io_util.h"
+#include "mesh/mesh.h"
+#include "sph/particles.h"
 
 namespace meniscus {
 namespace io_detail {
@@ -67,6 +69,10 @@ std::string safe_attribute_name(const std::string& name, std::size_t index);
 void write_ply_mesh(const TriMesh& mesh, const std::string& path);
 void write_obj_mesh(const TriMesh& mesh, const std::string& path);
 void write_vtk_mesh(const TriMesh& mesh, const std::string& path);
+// Particle writers (convert): VTK as an unstructured grid of vertex cells; PLY and raw XYZ by their own rules.
+void write_vtk_particles(const ParticleData& particles, const std::string& path);
+void write_xyz_particles(const ParticleData& particles, const std::string& path);
+void write_ply_particles(const ParticleData& particles, const std::string& path);
 
 }  // namespace io_detail
 }  // namespace meniscus

@@ -39,4 +39,14 @@ std::size_t first_non_finite(const std::vector<float>& values) {
     return values.size();
 }
 
+TriMesh triangulated(const TriMesh& mesh) {
+    TriMesh out = mesh;
+    out.quads.clear();
+    for (std::size_t q = 0; q + 3 < mesh.quads.size(); q += 4) {
+        const int32_t* v = &mesh.quads[q];
+        out.triangles.insert(out.triangles.end(), {v[0], v[1], v[2], v[0], v[2], v[3]});
+    }
+    return out;
+}
+
 }  // namespace meniscus

@@ -37,4 +37,8 @@ void validate_mesh_arrays(const TriMesh& mesh, const std::string& where);
 // Index of the first value that is NaN or infinite, or values.size() when all are finite.
 std::size_t first_non_finite(const std::vector<float>& values);
 
+// The mesh with every quad split back into two triangles along its first diagonal (for checks and for formats or
+// tools that take triangles only).
+TriMesh triangulated(const TriMesh& mesh);
+
 }  // namespace meniscus

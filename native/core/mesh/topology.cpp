@@ -134,6 +134,7 @@ std::size_t count_unreferenced_vertices(const TriMesh& mesh) {
 }  // namespace
 
 MeshCheck check_mesh(const TriMesh& mesh) {
+    if (!mesh.quads.empty()) return check_mesh(triangulated(mesh));  // a quad is closed/manifold as its two halves are
     validate_mesh_arrays(mesh, "check_mesh");
     const int threads = 0;
     const int32_t* tris = mesh.triangles.data();

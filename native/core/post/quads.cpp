@@ -129,14 +129,4 @@ std::size_t merge_triangles_into_quads(TriMesh& mesh, const QuadCriteria& criter
     return quads.size() / 4;
 }
 
-TriMesh triangulated(const TriMesh& mesh) {
-    TriMesh out = mesh;
-    out.quads.clear();
-    for (std::size_t q = 0; q + 3 < mesh.quads.size(); q += 4) {
-        const int32_t* v = &mesh.quads[q];
-        out.triangles.insert(out.triangles.end(), {v[0], v[1], v[2], v[0], v[2], v[3]});
-    }
-    return out;
-}
-
 }  // namespace meniscus

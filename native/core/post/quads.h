@@ -20,8 +20,5 @@ struct QuadCriteria {
 // and triangles with a repeated vertex, are left alone.
 std::size_t merge_triangles_into_quads(TriMesh& mesh, const QuadCriteria& criteria, int threads);
 
-// The mesh with every quad split back into two triangles along its first diagonal (for checks and for formats or
-// tools that take triangles only).
-TriMesh triangulated(const TriMesh& mesh);
 
 }  // namespace meniscus

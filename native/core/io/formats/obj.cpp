@@ -148,7 +148,8 @@ void write_obj_mesh(const TriMesh& mesh, const std::string& path) {
     const std::size_t nv = mesh.num_vertices(), nt = mesh.num_triangles();
     const bool normals = !mesh.normals.empty();
     FileWriter out(path);
-    out.put("# written by meniscus: " + std::to_string(nv) + " vertices, " + std::to_string(nt) + " triangles\n");
+    out.put("# written by meniscus: " + std::to_string(nv) + " vertices, " + std::to_string(nt) + " triangles, " +
+            std::to_string(mesh.num_quads()) + " quads\n");
     auto put_vec = [&](const char* tag, const std::vector<float>& data, std::size_t i) {
         out.put(tag);
         for (int k = 0; k < 3; ++k) {
@@ -160,10 +161,10 @@ void write_obj_mesh(const TriMesh& mesh, const std::string& path) {
     for (std::size_t v = 0; v < nv; ++v) put_vec("v", mesh.vertices, v);
     if (normals)
         for (std::size_t v = 0; v < nv; ++v) put_vec("vn", mesh.normals, v);
-    for (std::size_t t = 0; t < nt; ++t) {
+    auto put_face = [&](const int32_t* corners, int count) {
         out.put("f");
-        for (int k = 0; k < 3; ++k) {
-            long long index = static_cast<long long>(mesh.triangles[3 * t + k]) + 1;  // OBJ counts from 1
+        for (int k = 0; k < count; ++k) {
+            long long index = static_cast<long long>(corners[k]) + 1;  // OBJ counts from 1
             out.put(" ");
             out.put_int_text(index);
             if (normals) {
@@ -172,7 +173,9 @@ void write_obj_mesh(const TriMesh& mesh, const std::string& path) {
             }
         }
         out.put("\n");
-    }
+    };
+    for (std::size_t t = 0; t < nt; ++t) put_face(&mesh.triangles[3 * t], 3);
+    for (std::size_t q = 0; q < mesh.num_quads(); ++q) put_face(&mesh.quads[4 * q], 4);
     out.close();
 }
 

@@ -375,7 +375,7 @@ void write_ply_mesh(const TriMesh& mesh, const std::string& path) {
         else
             for (int j = 0; j < k; ++j) header += property + names[i] + "_" + std::to_string(j) + "\n";
     }
-    header += "element face " + std::to_string(nt) + "\nproperty list uchar int vertex_indices\nend_header\n";
+    header += "element face " + std::to_string(nt + mesh.num_quads()) + "\nproperty list uchar int vertex_indices\nend_header\n";
 
     FileWriter out(path);
     out.put(header);
@@ -397,9 +397,21 @@ void write_ply_mesh(const TriMesh& mesh, const std::string& path) {
         out.put_u8(3);
         for (int k = 0; k < 3; ++k) out.put_le32(static_cast<std::uint32_t>(mesh.triangles[3 * t + k]));
     }
+    for (std::size_t q = 0; q < mesh.num_quads(); ++q) {
+        out.put_u8(4);
+        for (int k = 0; k < 4; ++k) out.put_le32(static_cast<std::uint32_t>(mesh.quads[4 * q + k]));
+    }
     out.close();
 }
 
+// Particles: the vertex element of a mesh without faces, with every attribute (checked as a mesh's would be).
+void write_ply_particles(const ParticleData& particles, const std::string& path) {
+    TriMesh points;
+    points.vertices = particles.positions;
+    points.attributes = particles.attributes;
+    validate_mesh(points, path);
+    write_ply_mesh(points, path);
+}
 
 }  // namespace io_detail
 }  // namespace meniscus

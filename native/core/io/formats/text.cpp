@@ -13,6 +13,7 @@
 #include <cmath>
 
 #include "io/io_util.h"
+#include "io/mesh_writer.h"
 
 namespace meniscus {
 namespace io_detail {
@@ -291,6 +292,13 @@ ParticleData read_xyz_particles(const Source& source) {
     out.positions.resize(values);
     decode_to_float(source.data, values, ScalarType::f32, false, out.positions.data());
     return out;
+}
+
+// Raw little-endian float32 triples, as splashsurf reads .xyz (attributes have no place in it).
+void write_xyz_particles(const ParticleData& particles, const std::string& path) {
+    FileWriter out(path);
+    for (float x : particles.positions) out.put_le_float(x);
+    out.close();
 }
 
 }  // namespace io_detail

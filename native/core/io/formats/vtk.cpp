@@ -34,6 +34,43 @@ void add_polygon(const Cursor& c, const vtk_legacy::Polygons& polygons, std::siz
         for (std::uint64_t corner : {begin, k, k + 1}) out.push_back(static_cast<std::int32_t>(polygons.connectivity[static_cast<std::size_t>(corner)]));
 }
 
+// POINT_DATA: the normals (when given) and every attribute, as SCALARS, VECTORS or, for other component counts, a
+// FIELD block. Shared by meshes and particles.
+void put_point_data(FileWriter& out, std::size_t nv, const std::vector<float>& normals, const std::vector<Attribute>& attributes) {
+    if (normals.empty() && attributes.empty()) return;
+    out.put("POINT_DATA " + std::to_string(nv) + "\n");
+    auto put_values = [&](const std::vector<float>& values) {
+        for (float x : values) out.put_be_float(x);
+        out.put("\n");
+    };
+    if (!normals.empty()) {
+        out.put("NORMALS normals float\n");
+        put_values(normals);
+    }
+    std::vector<std::size_t> other;  // component counts SCALARS / VECTORS cannot express go to a FIELD block
+    for (std::size_t i = 0; i < attributes.size(); ++i) {
+        const auto& a = attributes[i];
+        std::string name = safe_attribute_name(a.name, i);
+        if (a.components == 1) {
+            out.put("SCALARS " + name + " float 1\nLOOKUP_TABLE default\n");
+            put_values(a.values);
+        } else if (a.components == 3) {
+            out.put("VECTORS " + name + " float\n");
+            put_values(a.values);
+        } else {
+            other.push_back(i);
+        }
+    }
+    if (!other.empty()) {
+        out.put("FIELD FieldData " + std::to_string(other.size()) + "\n");
+        for (std::size_t i : other) {
+            const auto& a = attributes[i];
+            out.put(safe_attribute_name(a.name, i) + " " + std::to_string(a.components) + " " + std::to_string(nv) + " float\n");
+            put_values(a.values);
+        }
+    }
+}
+
 }  // namespace
 
 TriMesh read_vtk_mesh(const Source& source) {
@@ -64,47 +101,37 @@ void write_vtk_mesh(const TriMesh& mesh, const std::string& path) {
     out.put("# vtk DataFile Version 4.2\nmeniscus surface mesh\nBINARY\nDATASET POLYDATA\nPOINTS " + std::to_string(nv) +
             " float\n");
     for (float x : mesh.vertices) out.put_be_float(x);
-    out.put("\nPOLYGONS " + std::to_string(nt) + " " + std::to_string(4 * nt) + "\n");
+    const std::size_t nq = mesh.num_quads();
+    out.put("\nPOLYGONS " + std::to_string(nt + nq) + " " + std::to_string(4 * nt + 5 * nq) + "\n");
     for (std::size_t t = 0; t < nt; ++t) {
         out.put_be32(3);
         for (int k = 0; k < 3; ++k) out.put_be32(static_cast<std::uint32_t>(mesh.triangles[3 * t + k]));
     }
+    for (std::size_t q = 0; q < nq; ++q) {
+        out.put_be32(4);
+        for (int k = 0; k < 4; ++k) out.put_be32(static_cast<std::uint32_t>(mesh.quads[4 * q + k]));
+    }
     out.put("\n");
-    if (mesh.normals.empty() && mesh.attributes.empty()) {
-        out.close();
-        return;
+    put_point_data(out, nv, mesh.normals, mesh.attributes);
+    out.close();
+}
+
+// Particles as splashsurf and ParaView read them: an UNSTRUCTURED_GRID of VERTEX cells (type 1), one per particle.
+void write_vtk_particles(const ParticleData& particles, const std::string& path) {
+    const std::size_t n = particles.size();
+    FileWriter out(path);
+    out.put("# vtk DataFile Version 4.2\nmeniscus particles\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS " + std::to_string(n) +
+            " float\n");
+    for (float x : particles.positions) out.put_be_float(x);
+    out.put("\nCELLS " + std::to_string(n) + " " + std::to_string(2 * n) + "\n");
+    for (std::size_t i = 0; i < n; ++i) {
+        out.put_be32(1);
+        out.put_be32(static_cast<std::uint32_t>(i));
     }
-    out.put("POINT_DATA " + std::to_string(nv) + "\n");
-    auto put_values = [&](const std::vector<float>& values) {
-        for (float x : values) out.put_be_float(x);
-        out.put("\n");
-    };
-    if (!mesh.normals.empty()) {
-        out.put("NORMALS normals float\n");
-        put_values(mesh.normals);
-    }
-    std::vector<std::size_t> other;  // component counts SCALARS / VECTORS cannot express go to a FIELD block
-    for (std::size_t i = 0; i < mesh.attributes.size(); ++i) {
-        const auto& a = mesh.attributes[i];
-        std::string name = safe_attribute_name(a.name, i);
-        if (a.components == 1) {
-            out.put("SCALARS " + name + " float 1\nLOOKUP_TABLE default\n");
-            put_values(a.values);
-        } else if (a.components == 3) {
-            out.put("VECTORS " + name + " float\n");
-            put_values(a.values);
-        } else {
-            other.push_back(i);
-        }
-    }
-    if (!other.empty()) {
-        out.put("FIELD FieldData " + std::to_string(other.size()) + "\n");
-        for (std::size_t i : other) {
-            const auto& a = mesh.attributes[i];
-            out.put(safe_attribute_name(a.name, i) + " " + std::to_string(a.components) + " " + std::to_string(nv) + " float\n");
-            put_values(a.values);
-        }
-    }
+    out.put("\nCELL_TYPES " + std::to_string(n) + "\n");
+    for (std::size_t i = 0; i < n; ++i) out.put_be32(1);
+    out.put("\n");
+    put_point_data(out, n, {}, particles.attributes);
     out.close();
 }
 
