@@ -21,9 +21,9 @@ PINS = ROOT / "tests" / "data" / "mesh_pins.json"
 FRAMES = sorted(p.name for p in SHARED.glob("*") if p.suffix in (".vtk", ".bgeo"))
 
 FULL = dict(particle_radius=0.025, smoothing_length=2.0, cube_size=0.5, iso_threshold=0.6, mesh_cleanup=False,
-            decimate_barnacles=True, smoothing_iterations=25, smoothing_strength=1.0, smoothing_weights=True,
-            weights_normalization=0.0, volume_restoration=True, normals=True, normal_smoothing_iterations=10,
-            sph_normals=False)
+            decimate_barnacles=True, smoothing_iterations=25, smoothing_strength=1.0, smoothing_reach=0.0,
+            smoothing_weights=True, weights_normalization=0.0, volume_restoration=True, normals=True,
+            normal_smoothing_iterations=10, sph_normals=False)
 CASES = {
     "full c=0.5": FULL,
     "full c=1.0": dict(FULL, cube_size=1.0),
@@ -32,6 +32,8 @@ CASES = {
     "cleanup, uniform smoothing, SPH normals c=1.0": dict(FULL, cube_size=1.0, mesh_cleanup=True,
                                                           decimate_barnacles=False, smoothing_weights=False,
                                                           volume_restoration=False, sph_normals=True),
+    # The opt-in heat flow of a physical reach (post/heat_smoothing.h) at the setting README's figures were measured with.
+    "physical-reach smoothing 4.28 r c=1.0": dict(FULL, cube_size=1.0, smoothing_reach=4.28),
 }
 
 

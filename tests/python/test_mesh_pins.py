@@ -1,4 +1,4 @@
-"""Refactors keep behaviour: every shared frame, under four parameter sets, gives the pinned mesh bit for bit (vertices,
+"""Refactors keep behaviour: every shared frame, under five parameter sets, gives the pinned mesh bit for bit (vertices,
 triangles, normals, attributes), with 1 thread and with 2 (see mesh_pins.py; pins in tests/data/mesh_pins.json)."""
 import json
 
