@@ -438,7 +438,7 @@ PYBIND11_MODULE(_core, m) {
         }
         return out;
     }, py::arg("vertices"), py::arg("triangles"), py::arg("threads") = 0, py::arg("scale_length") = 0.0, py::arg("raw_mean_edge") = 0.0);
-    // Measures and the smoothing stage on their own, for the benchmarks and tests (bench/smoothing_table.py).
+    // Measures and the smoothing stage on their own, for the benchmarks and tests (bench/smoothing_scale.py).
     m.def("taubin_distance", [](const py::array& vertices, const py::array& triangles, int passes, int threads) {
         TriMesh mesh = mesh_from_arrays(vertices, triangles, py::none(), py::dict());
         py::gil_scoped_release release;
@@ -508,6 +508,6 @@ PYBIND11_MODULE(_core, m) {
     }, py::arg("vertices"), py::arg("triangles"), py::arg("weights") = py::none(), py::arg("reach") = 0.0, py::arg("particle_radius") = 0.0,
        py::arg("local_return") = true, py::arg("volume_correction") = true, py::arg("parts") = 0, py::arg("grid_return") = false, py::arg("reuse_return") = false, py::arg("return_tolerance") = 0.0, py::arg("local_scale") = 0.0, py::arg("wall_mask") = py::none(),
        py::arg("wall_planes") = py::none(), py::arg("threads") = 0,
-       "The default smoothing stage (post/heat_smoothing.h) on a mesh: reach and particle_radius absolute; returns "
-       "(vertices (V, 3) float32, report dict).");
+       "The physical-reach smoothing stage (post/heat_smoothing.h; smoothing_reach > 0) on a mesh: reach and "
+       "particle_radius absolute; returns (vertices (V, 3) float32, report dict).");
 }

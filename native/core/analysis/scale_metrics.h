@@ -1,5 +1,5 @@
 // Smoothness at a physical scale (issue 12) and per-component volumes and centroids, for the quality report
-// (assess_quality with a scale, `meniscus inspect --particle-radius`) and the benchmarks (bench/smoothing_table.py).
+// (assess_quality with a scale, `meniscus inspect --particle-radius`) and the benchmarks (bench/smoothing_scale.py).
 //
 // hfL (the issue's definition): the mean distance between a mesh and its own Taubin low-pass (uniform umbrella,
 // lambda 0.5 / mu -0.53) with round(1.36 (L / e)^2) pass pairs, e the RAW mesh's mean edge length, L a length (2 r);
