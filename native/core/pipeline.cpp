@@ -5,6 +5,7 @@
 
 #include "base/parallel.h"
 #include "mesh/adjacency.h"
+#include "post/container.h"
 #include "post/decimation.h"
 #include "post/mesh_cleanup.h"
 #include "post/normals.h"
@@ -28,23 +29,38 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
     if (positions.count == 0) stats.warnings.push_back("no particles: the mesh is empty");
 
     // Particles -> marching-cubes mesh (its stages time themselves: neighborhood, density, level set and marching cubes).
-    SurfaceReconstruction reconstruction = reconstruct_surface(positions, surface, options.execution, &stats);
+    // The container's particle box drops particles there; a capped mesh box closes the surface on its walls.
+    const ContainerParams& container = options.container;
+    const bool mesh_box = container.mesh_aabb_min && container.mesh_aabb_max;
+    const bool capped = mesh_box && container.mesh_aabb_cap;
+    SurfaceReconstruction reconstruction = reconstruct_surface(positions, surface, options.execution, &stats, &container);
     const SphField particles = reconstruction.sph_field();
     TriMesh mesh = std::move(reconstruction.mesh);
     if (options.keep_raw_mesh) result.raw_mesh = mesh;
 
+    // Capped: the vertices on the walls, held there by every later stage. Cleanup and decimation leave them in place
+    // (pinned), so after each they are found again by their exact coordinates.
+    WallConstraints walls;
+    const auto find_walls = [&] {
+        if (capped) walls = find_wall_vertices(mesh, *container.mesh_aabb_min, *container.mesh_aabb_max, threads);
+    };
+    find_walls();
+    const std::vector<uint8_t>* pinned = capped ? &walls.mask : nullptr;
+
     // Mesh cleanup and barnacle decimation (Sec. 3.3): the slivers marching cubes leaves at grid points.
     if (post.mesh_cleanup) {
         StageTimer timer(&stats, "mesh cleanup");
-        const std::size_t removed = mesh_cleanup(mesh, surface.cube_edge(), post.mesh_cleanup_snap_distance, threads);
+        const std::size_t removed = mesh_cleanup(mesh, surface.cube_edge(), post.mesh_cleanup_snap_distance, threads, pinned);
         stats.set_count("cleanup_removed_vertices", static_cast<double>(removed));
+        find_walls();
     }
 
     MeshAdjacency adjacency;
     if (post.decimate_barnacles) {
         StageTimer timer(&stats, "decimation");
-        const std::size_t removed = decimate_barnacles(mesh, threads, &adjacency);
+        const std::size_t removed = decimate_barnacles(mesh, threads, &adjacency, pinned);
         stats.set_count("decimated_configurations", static_cast<double>(removed));
+        find_walls();
     }
 
     // From here on the topology stays as it is: one adjacency serves smoothing, restoration and normals. Decimation
@@ -65,22 +81,34 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         stats.set_count("weights_normalization", result.weights_normalization);
     }
     if (post.output_weights) mesh.attributes.push_back({"weights", 1, weights});
-    const std::vector<float> smoothing_amount = post.smoothing_weights ? std::move(weights) : std::vector<float>{};
+    std::vector<float> smoothing_amount = post.smoothing_weights ? std::move(weights) : std::vector<float>{};
+    if (capped && post.smoothing_iterations > 0)
+        smoothing_amount = smoothing_amount_at_walls(walls, adjacency.vertex_neighbours, std::move(smoothing_amount));
 
     // Weighted Laplacian smoothing (Eq. 3-5), remembering the surface it started from.
     UnsmoothedSurface unsmoothed;
     if (post.smoothing_iterations > 0) {
         StageTimer timer(&stats, "smoothing");
         unsmoothed = record_unsmoothed_surface(mesh, threads);
-        laplacian_smooth(mesh, adjacency, smoothing_amount, post.smoothing_iterations, post.smoothing_strength, threads);
+        laplacian_smooth(mesh, adjacency, smoothing_amount, post.smoothing_iterations, post.smoothing_strength, threads,
+                         capped ? &walls : nullptr);
     }
 
     // Volume restoration: each component's volume back, along smoothed normals the normals stage may take.
     SmoothedNormals restoration_normals;
     if (post.smoothing_iterations > 0 && post.volume_restoration) {
         StageTimer timer(&stats, "volume restoration");
-        restoration_normals = restore_component_volumes(mesh, adjacency, unsmoothed, smoothing_amount, surface.compact_support(),
-                                                        restoration_normal_iterations(post), threads);
+        // Vertices on a wall do not move along normals (which leave the wall): the rest of the surface restores the
+        // volume, so the step's estimate must not count their area.
+        std::vector<float> amount;
+        if (capped) {
+            amount = smoothing_amount.empty() ? std::vector<float>(mesh.num_vertices(), 1.0f) : smoothing_amount;
+            for (std::size_t v = 0; v < walls.mask.size(); ++v)
+                if (walls.mask[v]) amount[v] = 0.0f;
+        }
+        restoration_normals = restore_component_volumes(mesh, adjacency, unsmoothed, capped ? amount : smoothing_amount, surface.compact_support(),
+                                                        restoration_normal_iterations(post), threads,
+                                                        capped ? &walls : nullptr);
     }
 
     // The collapse guard: a component that smoothing collapsed gets its unsmoothed positions back.
@@ -105,6 +133,19 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         StageTimer timer(&stats, "attributes");
         for (Attribute& transferred : transfer_attributes(particles, attributes, mesh.vertices, threads))
             mesh.attributes.push_back(std::move(transferred));
+    }
+
+    // The mesh box: capped, every vertex stays inside it (volume restoration moves vertices near a wall along
+    // normals that may point through it); open, the surface is cut there like splashsurf's.
+    if (mesh_box) {
+        StageTimer timer(&stats, "container");
+        const Vector3& lower = *container.mesh_aabb_min;
+        const Vector3& upper = *container.mesh_aabb_max;
+        if (capped)
+            stats.set_count("container_clamped_vertices", static_cast<double>(clamp_into_box(mesh, lower, upper)));
+        else
+            stats.set_count("container_removed_triangles",
+                            static_cast<double>(cut_open_at_box(mesh, lower, upper, container.mesh_aabb_clamp_verts)));
     }
 
     // The last line of defence for the host application (post/vertex_guard.h).

@@ -1,0 +1,109 @@
+#include "post/container.h"
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "base/parallel.h"
+
+namespace meniscus {
+
+namespace {
+
+// The box as floats: vertices are floats, and a vertex on a wall holds the plane's coordinate rounded to float.
+std::array<float, 6> float_planes(const Vector3& lower, const Vector3& upper) {
+    std::array<float, 6> planes{};
+    for (int k = 0; k < 3; ++k) {
+        planes[static_cast<std::size_t>(2 * k)] = static_cast<float>(lower[k]);
+        planes[static_cast<std::size_t>(2 * k + 1)] = static_cast<float>(upper[k]);
+    }
+    return planes;
+}
+
+bool outside(const float* p, const std::array<float, 6>& planes) {
+    for (int k = 0; k < 3; ++k)
+        if (p[k] < planes[static_cast<std::size_t>(2 * k)] || p[k] > planes[static_cast<std::size_t>(2 * k + 1)]) return true;
+    return false;
+}
+
+}  // namespace
+
+WallConstraints find_wall_vertices(const TriMesh& mesh, const Vector3& lower, const Vector3& upper, int threads) {
+    WallConstraints walls;
+    walls.planes = float_planes(lower, upper);
+    walls.mask.assign(mesh.num_vertices(), 0);
+    parallel_for(static_cast<int64_t>(mesh.num_vertices()), threads, [&](int64_t v) {
+        uint8_t faces = 0;
+        for (int f = 0; f < 6; ++f)
+            if (mesh.vertices[static_cast<std::size_t>(3 * v + f / 2)] == walls.planes[static_cast<std::size_t>(f)]) faces |= uint8_t(1u << f);
+        walls.mask[static_cast<std::size_t>(v)] = faces;
+    });
+    return walls;
+}
+
+std::vector<float> smoothing_amount_at_walls(const WallConstraints& walls, const CsrList& neighbours, std::vector<float> amount) {
+    const std::size_t nv = walls.mask.size();
+    if (amount.empty()) amount.assign(nv, 1.0f);
+    for (std::size_t v = 0; v < nv; ++v) {
+        if (!walls.mask[v]) continue;
+        bool contact = false;
+        for (int64_t k = neighbours.begin(v); k < neighbours.end(v) && !contact; ++k) contact = walls.mask[static_cast<std::size_t>(neighbours.items[k])] == 0;
+        amount[v] = contact ? 0.0f : 1.0f;
+    }
+    return amount;
+}
+
+std::size_t cut_open_at_box(TriMesh& mesh, const Vector3& lower, const Vector3& upper, bool clamp_vertices) {
+    const std::array<float, 6> planes = float_planes(lower, upper);
+    const std::size_t nv = mesh.num_vertices();
+    std::vector<uint8_t> out(nv);
+    for (std::size_t v = 0; v < nv; ++v) out[v] = outside(&mesh.vertices[3 * v], planes);
+    std::vector<int32_t> triangles;
+    triangles.reserve(mesh.triangles.size());
+    std::vector<uint8_t> used(nv, 0);
+    for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
+        const int32_t* q = &mesh.triangles[3 * t];
+        if (out[q[0]] && out[q[1]] && out[q[2]]) continue;
+        triangles.insert(triangles.end(), q, q + 3);
+        used[q[0]] = used[q[1]] = used[q[2]] = 1;
+    }
+    const std::size_t removed = mesh.num_triangles() - triangles.size() / 3;
+    // Vertices renumbered in their old order, so the result does not depend on anything but the input.
+    std::vector<int32_t> renumbered(nv, -1);
+    int32_t next = 0;
+    for (std::size_t v = 0; v < nv; ++v)
+        if (used[v]) renumbered[v] = next++;
+    auto keep_used = [&](std::vector<float>& values, std::size_t width) {
+        if (values.empty()) return;
+        std::size_t w = 0;
+        for (std::size_t v = 0; v < nv; ++v)
+            if (used[v]) {
+                std::copy_n(&values[width * v], width, &values[width * w]);
+                ++w;
+            }
+        values.resize(width * w);
+    };
+    keep_used(mesh.vertices, 3);
+    keep_used(mesh.normals, 3);
+    for (Attribute& a : mesh.attributes) keep_used(a.values, static_cast<std::size_t>(a.components));
+    for (int32_t& index : triangles) index = renumbered[static_cast<std::size_t>(index)];
+    mesh.triangles.swap(triangles);
+    if (clamp_vertices) clamp_into_box(mesh, lower, upper);
+    return removed;
+}
+
+std::size_t clamp_into_box(TriMesh& mesh, const Vector3& lower, const Vector3& upper) {
+    const std::array<float, 6> planes = float_planes(lower, upper);
+    std::size_t moved = 0;
+    for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
+        float* p = &mesh.vertices[3 * v];
+        if (!outside(p, planes)) continue;
+        for (int k = 0; k < 3; ++k)
+            p[k] = std::min(std::max(p[k], planes[static_cast<std::size_t>(2 * k)]), planes[static_cast<std::size_t>(2 * k + 1)]);
+        ++moved;
+    }
+    return moved;
+}
+
+}  // namespace meniscus

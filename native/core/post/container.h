@@ -1,0 +1,33 @@
+// The container's mesh box after reconstruction (splashsurf's --mesh-aabb-min/max, --mesh-aabb-clamp-verts).
+// Capped (the default), marching cubes already closed the surface with flat faces on the walls (surface/bricks.h,
+// MeshBox); here its wall vertices are found, for the stages that must keep them on their walls
+// (post/wall_constraints.h). Open, the surface is cut at the box like splashsurf does.
+#pragma once
+#include <cstddef>
+
+#include "mesh/adjacency.h"
+#include "mesh/mesh.h"
+#include "parameters.h"
+#include "post/wall_constraints.h"
+
+namespace meniscus {
+
+// The vertices lying exactly on a wall plane (marching cubes writes the plane's coordinate itself, and the stages
+// before smoothing never move such a vertex; see the pipeline), with the planes.
+WallConstraints find_wall_vertices(const TriMesh& mesh, const Vector3& lower, const Vector3& upper, int threads);
+
+// How much smoothing moves each vertex (`amount`, empty: 1 everywhere), adjusted on the walls. The cap is flat, not
+// a free surface: its vertices get 1 (they slide along the wall, evening out its triangles). The contact line (wall
+// vertices with a neighbour off the walls) gets 0: it is where the raw surface meets the wall, and pulled along the
+// wall by the cap it would drag the free surface down into a fillet.
+std::vector<float> smoothing_amount_at_walls(const WallConstraints& walls, const CsrList& neighbours, std::vector<float> amount);
+
+// Open cut: removes the triangles with all three vertices outside the box and the vertices no triangle uses
+// (normals and attributes follow); with clamp_vertices, then moves the vertices outside onto the box's faces.
+// Returns the number of triangles removed.
+std::size_t cut_open_at_box(TriMesh& mesh, const Vector3& lower, const Vector3& upper, bool clamp_vertices);
+
+// Clamps every vertex coordinate into the box. Returns the number of vertices moved.
+std::size_t clamp_into_box(TriMesh& mesh, const Vector3& lower, const Vector3& upper);
+
+}  // namespace meniscus
