@@ -1,0 +1,80 @@
+"""The container through the Python API and the command line (splashsurf's flag spelling): the surface of a block of
+fluid cut by a box stays inside it, closed by flat faces on the walls; an open cut; the particle box's count."""
+import json
+import subprocess
+
+import numpy as np
+import pytest
+
+import meniscus
+
+RADIUS = 0.025
+LOWER, UPPER = (0.1031, 0.0977, 0.0712), (0.4969, 0.5023, 1.0)
+
+
+def fluid_block():
+    # Particles on a lattice of spacing 2r filling [0, 0.6] x [0, 0.6] x [0, 0.4]; the box cuts four sides and the floor.
+    axes = [RADIUS * (1 + 2 * np.arange(n)) for n in (12, 12, 8)]
+    return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3).astype(np.float32)
+
+
+def inside(vertices):
+    lower, upper = np.float32(LOWER), np.float32(UPPER)
+    return np.all((vertices >= lower) & (vertices <= upper), axis=1)
+
+
+def test_capped_box_through_the_api():
+    mesh = meniscus.reconstruct(fluid_block(), RADIUS, mesh_aabb_min=LOWER, mesh_aabb_max=UPPER, threads=2)
+    assert meniscus.check_mesh(mesh)["ok"]
+    assert inside(mesh.vertices).all()
+    on_floor = mesh.vertices[:, 2] == np.float32(LOWER[2])
+    assert on_floor.sum() > 100  # the cap on the floor lies on its plane exactly
+    floor_triangles = on_floor[mesh.triangles].all(axis=1)
+    assert floor_triangles.sum() > 100
+
+
+def test_open_cut_and_clamping_through_the_api():
+    block = fluid_block()
+    cut = meniscus.reconstruct(block, RADIUS, mesh_aabb_min=LOWER, mesh_aabb_max=UPPER, mesh_aabb_cap=False)
+    assert not meniscus.check_mesh(cut)["ok"]  # open where the box cut it
+    assert inside(cut.vertices)[cut.triangles].any(axis=1).all()
+    clamped = meniscus.reconstruct(block, RADIUS, mesh_aabb_min=LOWER, mesh_aabb_max=UPPER, mesh_aabb_cap=False,
+                                   mesh_aabb_clamp_verts=True)
+    assert inside(clamped.vertices).all()
+    assert len(clamped.triangles) == len(cut.triangles)
+
+
+def test_particle_box_counts_the_particles_dropped():
+    block = fluid_block()
+    mesh = meniscus.reconstruct(block, RADIUS, particle_aabb_min=(-1, -1, -1), particle_aabb_max=(0.3, 10, 10))
+    assert mesh.stats["counts"]["particles_outside_box"] == int((block[:, 0] > 0.3).sum())
+    assert mesh.stats["counts"]["particles"] == int((block[:, 0] <= 0.3).sum())
+
+
+def test_a_box_with_one_corner_is_refused_naming_it():
+    with pytest.raises(ValueError, match="mesh_aabb_min"):
+        meniscus.reconstruct(fluid_block(), RADIUS, mesh_aabb_min=LOWER)
+
+
+def test_splashsurf_flags_on_the_command_line(cli, tmp_path):
+    fluid_block().astype("<f4").tofile(tmp_path / "block.xyz")
+    stats = tmp_path / "stats.json"
+    line = ["reconstruct", "block.xyz", "-r=0.025", "-c=0.5", "-o", "capped.ply", "--stats", "stats.json",
+            "--mesh-aabb-min", *map(str, LOWER), "--mesh-aabb-max", *map(str, UPPER),
+            "--particle-aabb-min", "-1", "-1", "-1", "--particle-aabb-max", "10", "10", "10"]
+    result = subprocess.run([cli, *line], capture_output=True, text=True, cwd=tmp_path, timeout=600)
+    assert result.returncode == 0, result.stderr
+    mesh = meniscus.read_mesh(tmp_path / "capped.ply")
+    assert meniscus.check_mesh(mesh)["ok"] and inside(mesh.vertices).all()
+    assert json.loads(stats.read_text())["frames"][0]["counts"]["particles_outside_box"] == 0
+
+    line = ["reconstruct", "block.xyz", "-r=0.025", "-c=0.5", "-o", "open.ply", "--mesh-aabb-min", *map(str, LOWER),
+            "--mesh-aabb-max", *map(str, UPPER), "--mesh-aabb-cap=off", "--mesh-aabb-clamp-verts=on"]
+    result = subprocess.run([cli, *line], capture_output=True, text=True, cwd=tmp_path, timeout=600)
+    assert result.returncode == 0, result.stderr
+    mesh = meniscus.read_mesh(tmp_path / "open.ply")
+    assert inside(mesh.vertices).all() and not meniscus.check_mesh(mesh)["ok"]
+
+    result = subprocess.run([cli, "reconstruct", "block.xyz", "-r=0.025", "-o", "x.ply", "--mesh-aabb-max", "1", "1", "1"],
+                            capture_output=True, text=True, cwd=tmp_path, timeout=600)
+    assert result.returncode != 0 and "--mesh-aabb-max" in result.stderr
