@@ -78,3 +78,21 @@ def test_splashsurf_flags_on_the_command_line(cli, tmp_path):
     result = subprocess.run([cli, "reconstruct", "block.xyz", "-r=0.025", "-o", "x.ply", "--mesh-aabb-max", "1", "1", "1"],
                             capture_output=True, text=True, cwd=tmp_path, timeout=600)
     assert result.returncode != 0 and "--mesh-aabb-max" in result.stderr
+
+
+def test_add_on_container_bounds_follow_rotation_and_scale_without_blender():
+    # The add-on's box from an object's bounds is plain Python (no bpy): load its module from the source tree.
+    import importlib.util
+    import math
+    import pathlib
+
+    path = pathlib.Path(__file__).resolve().parents[2] / "addon/meniscus/blender/container.py"
+    spec = importlib.util.spec_from_file_location("meniscus_container", path)
+    container = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(container)
+    corners = [(x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
+    c, s = math.cos(math.pi / 4), math.sin(math.pi / 4)
+    matrix = [[2 * c, -s, 0, 10], [2 * s, c, 0, 0], [0, 0, 3, -1], [0, 0, 0, 1]]  # scale (2, 1, 3), 45 degrees about z
+    lower, upper = container.world_bounds(corners, matrix)
+    np.testing.assert_allclose(lower, (10 - 3 * c, -3 * s, -4), atol=1e-12)
+    np.testing.assert_allclose(upper, (10 + 3 * c, 3 * s, 2), atol=1e-12)
