@@ -47,6 +47,11 @@ def _can_be_source(settings, obj):
     return obj != settings.id_data and obj.type in {"MESH", "POINTCLOUD"}
 
 
+def _rebuilding(kind, **keywords):
+    """A setting that is not animatable and rebuilds the surface when edited."""
+    return kind(options=set(), update=_rebuild_after_edit, **keywords)
+
+
 def _can_be_container(settings, obj):
     # The surface itself would be cut by its own bounds, which follow the cut.
     return obj != settings.id_data
@@ -121,22 +126,13 @@ class MeniscusSurfaceSettings(bpy.types.PropertyGroup):
     )
 
     # Container (the schema's boxes come from this object) ----------------------------------------------------------
-    container_object: PointerProperty(
-        name="Container",
+    container_object: _rebuilding(
+        PointerProperty, type=bpy.types.Object, poll=_can_be_container, name="Container",
         description="Object whose bounds, as they are at each frame (animation included), are the container: the "
-                    "surface is cut at its walls and closed there by flat faces (or left open, see Closed At Walls)",
-        type=bpy.types.Object,
-        poll=_can_be_container,
-        options=set(),
-        update=_rebuild_after_edit,
-    )
-    use_container_particle_box: BoolProperty(
-        name="Drop Particles Outside",
-        description="Also leave out the particles outside the container's bounds before the reconstruction",
-        default=False,
-        options=set(),
-        update=_rebuild_after_edit,
-    )
+                    "surface is cut at its walls and closed there by flat faces (or left open, see Closed At Walls)")
+    use_container_particle_box: _rebuilding(
+        BoolProperty, default=False, name="Drop Particles Outside",
+        description="Also leave out the particles outside the container's bounds before the reconstruction")
 
     # Cache -------------------------------------------------------------------------------------------------------
     use_cache: BoolProperty(
