@@ -45,6 +45,7 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         if (capped) walls = find_wall_vertices(mesh, *container.mesh_aabb_min, *container.mesh_aabb_max, threads);
     };
     find_walls();
+    if (capped) stats.set_count("container_edge_vertices", static_cast<double>(square_box_edges(mesh, walls)));
     const std::vector<uint8_t>* pinned = capped ? &walls.mask : nullptr;
 
     // Mesh cleanup and barnacle decimation (Sec. 3.3): the slivers marching cubes leaves at grid points.
@@ -111,6 +112,12 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
                                                         capped ? &walls : nullptr);
     }
 
+    // Capped, every vertex stays inside the box: volume restoration moves vertices near a wall along normals that may
+    // point through it. Before the collapse guard, which reverts a component this leaves with a flat triangle.
+    if (capped && post.smoothing_iterations > 0)
+        stats.set_count("container_clamped_vertices",
+                        static_cast<double>(clamp_into_box(mesh, *container.mesh_aabb_min, *container.mesh_aabb_max)));
+
     // The collapse guard: a component that smoothing collapsed gets its unsmoothed positions back.
     if (post.smoothing_iterations > 0) {
         const std::size_t reverted = revert_collapsed_components(mesh, unsmoothed, threads);
@@ -135,17 +142,11 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
             mesh.attributes.push_back(std::move(transferred));
     }
 
-    // The mesh box: capped, every vertex stays inside it (volume restoration moves vertices near a wall along
-    // normals that may point through it); open, the surface is cut there like splashsurf's.
-    if (mesh_box) {
+    // The open mesh box: the surface is cut there like splashsurf's.
+    if (mesh_box && !capped) {
         StageTimer timer(&stats, "container");
-        const Vector3& lower = *container.mesh_aabb_min;
-        const Vector3& upper = *container.mesh_aabb_max;
-        if (capped)
-            stats.set_count("container_clamped_vertices", static_cast<double>(clamp_into_box(mesh, lower, upper)));
-        else
-            stats.set_count("container_removed_triangles",
-                            static_cast<double>(cut_open_at_box(mesh, lower, upper, container.mesh_aabb_clamp_verts)));
+        stats.set_count("container_removed_triangles", static_cast<double>(cut_open_at_box(
+                                                           mesh, *container.mesh_aabb_min, *container.mesh_aabb_max, container.mesh_aabb_clamp_verts)));
     }
 
     // The last line of defence for the host application (post/vertex_guard.h).

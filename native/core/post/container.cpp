@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "base/parallel.h"
+#include "mesh/topology.h"
 
 namespace meniscus {
 
@@ -40,6 +41,50 @@ WallConstraints find_wall_vertices(const TriMesh& mesh, const Vector3& lower, co
         walls.mask[static_cast<std::size_t>(v)] = faces;
     });
     return walls;
+}
+
+std::size_t square_box_edges(TriMesh& mesh, WallConstraints& walls) {
+    const std::size_t nv = mesh.num_vertices();
+    if (walls.mask.size() != nv) return 0;
+    // Walls each vertex is to join: from every triangle edge (u, v) with u on wall a (not v's) and v on a
+    // perpendicular wall b (not u's), a < b, u joins b. Collected over all edges first, so the order does not matter.
+    std::vector<uint8_t> join(nv, 0);
+    for (std::size_t t = 0; t < mesh.num_triangles(); ++t)
+        for (int c = 0; c < 3; ++c) {
+            const int32_t u = mesh.triangles[3 * t + c], v = mesh.triangles[3 * t + (c + 1) % 3];
+            const int32_t ends[2][2] = {{u, v}, {v, u}};
+            for (const auto& e : ends) {
+                const uint8_t mine = walls.mask[static_cast<std::size_t>(e[0])], theirs = walls.mask[static_cast<std::size_t>(e[1])];
+                for (int a = 0; a < 6; ++a) {
+                    if (!((mine >> a) & 1u) || ((theirs >> a) & 1u)) continue;
+                    for (int b = a + 1; b < 6; ++b)
+                        if (b / 2 != a / 2 && ((theirs >> b) & 1u) && !((mine >> b) & 1u)) join[static_cast<std::size_t>(e[0])] |= uint8_t(1u << b);
+                }
+            }
+        }
+    // Two vertices of a triangle may land on the same point of the edge: those triangles' vertices stay where they
+    // were, and the check is repeated, since staying can leave another triangle flat (each round keeps more).
+    const std::vector<float> before = mesh.vertices;
+    for (bool changed = true; changed;) {
+        for (std::size_t v = 0; v < nv; ++v) {
+            std::copy_n(&before[3 * v], 3, &mesh.vertices[3 * v]);
+            for (int f = 0; f < 6; ++f)
+                if ((join[v] >> f) & 1u) mesh.vertices[3 * v + f / 2] = walls.planes[static_cast<std::size_t>(f)];
+        }
+        changed = false;
+        for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
+            const int32_t* q = &mesh.triangles[3 * t];
+            if (!(join[q[0]] || join[q[1]] || join[q[2]]) || !triangle_has_zero_area(mesh.vertices.data(), q)) continue;
+            for (int c = 0; c < 3; ++c) join[q[c]] = 0;
+            changed = true;
+        }
+    }
+    std::size_t moved = 0;
+    for (std::size_t v = 0; v < nv; ++v) {
+        walls.mask[v] |= join[v];
+        moved += join[v] != 0;
+    }
+    return moved;
 }
 
 std::vector<float> smoothing_amount_at_walls(const WallConstraints& walls, const CsrList& neighbours, std::vector<float> amount) {

@@ -16,6 +16,12 @@ namespace meniscus {
 // before smoothing never move such a vertex; see the pipeline), with the planes.
 WallConstraints find_wall_vertices(const TriMesh& mesh, const Vector3& lower, const Vector3& upper, int threads);
 
+// Marching cubes cuts the box's edges (where two walls meet) across one cube: a bevel joins a vertex on one wall to
+// vertices on the other. Moves such a vertex onto the edge itself (of walls a and b, the vertex on the wall listed
+// first in WallConstraints' order moves), so both caps reach the edge and the bevel's faces lie on the other wall.
+// A move that would leave a triangle without area is not made. Updates the mask; returns the vertices moved.
+std::size_t square_box_edges(TriMesh& mesh, WallConstraints& walls);
+
 // How much smoothing moves each vertex (`amount`, empty: 1 everywhere), adjusted on the walls. The cap is flat, not
 // a free surface: its vertices get 1 (they slide along the wall, evening out its triangles). The contact line (wall
 // vertices with a neighbour off the walls) gets 0: it is where the raw surface meets the wall, and pulled along the
