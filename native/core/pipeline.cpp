@@ -84,14 +84,16 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
     if (post.output_weights) mesh.attributes.push_back({"weights", 1, weights});
     std::vector<float> smoothing_amount = post.smoothing_weights ? std::move(weights) : std::vector<float>{};
     if (capped && post.smoothing_iterations > 0)
-        smoothing_amount = smoothing_amount_at_walls(walls, adjacency.vertex_neighbours, std::move(smoothing_amount));
+        smoothing_amount = smoothing_amount_at_walls(walls, std::move(smoothing_amount));
 
     // Weighted Laplacian smoothing (Eq. 3-5), remembering the surface it started from.
     UnsmoothedSurface unsmoothed;
     if (post.smoothing_iterations > 0) {
         StageTimer timer(&stats, "smoothing");
         unsmoothed = record_unsmoothed_surface(mesh, threads);
-        laplacian_smooth(mesh, adjacency, smoothing_amount, post.smoothing_iterations, post.smoothing_strength, threads,
+        MeshAdjacency along_walls;  // capped: the contact line smoothed along itself (post/container.h)
+        if (capped) along_walls.vertex_neighbours = smoothing_neighbours_at_walls(walls, adjacency.vertex_neighbours);
+        laplacian_smooth(mesh, capped ? along_walls : adjacency, smoothing_amount, post.smoothing_iterations, post.smoothing_strength, threads,
                          capped ? &walls : nullptr);
     }
 

@@ -153,6 +153,22 @@ TEST_CASE("capped container: inside the box, flat on the walls, closed, the clip
     CHECK(floor_covered == Approx(floor_area).epsilon(1e-5));
     for (int f = 0; f < 4; ++f) CHECK(area_on_wall(mesh, f, 1e-6 * size) > 0.8 * size * (0.4 - kLower[2]));
 
+    // The free surface meets the side walls without sagging: each side wall's cap reaches as high as in the raw
+    // mesh (within a twentieth of a cube), which is within a cube of the raw top surface.
+    const auto highest = [](const TriMesh& m, int f) {
+        float top = -1e30f;
+        for (std::size_t v = 0; v < m.num_vertices(); ++v)
+            if (f < 0 || m.vertices[3 * v + f / 2] == static_cast<float>(f % 2 ? kUpper[f / 2] : kLower[f / 2]))
+                top = std::max(top, m.vertices[3 * v + 2]);
+        return double(top);
+    };
+    for (int f = 0; f < 4; ++f) {
+        INFO("wall " << f << ": cap up to " << highest(mesh, f) << ", raw " << highest(capped.raw_mesh, f) << ", raw top surface "
+                     << highest(capped.raw_mesh, -1));
+        CHECK(highest(mesh, f) >= highest(capped.raw_mesh, f) - 0.05 * cube);
+        CHECK(highest(capped.raw_mesh, f) > highest(capped.raw_mesh, -1) - cube);
+    }
+
     // Volume: the raw mesh of the same particles without a container, clipped to the box.
     PipelineOptions open = options;
     open.container = ContainerParams{};

@@ -87,16 +87,36 @@ std::size_t square_box_edges(TriMesh& mesh, WallConstraints& walls) {
     return moved;
 }
 
-std::vector<float> smoothing_amount_at_walls(const WallConstraints& walls, const CsrList& neighbours, std::vector<float> amount) {
-    const std::size_t nv = walls.mask.size();
-    if (amount.empty()) amount.assign(nv, 1.0f);
-    for (std::size_t v = 0; v < nv; ++v) {
-        if (!walls.mask[v]) continue;
-        bool contact = false;
-        for (int64_t k = neighbours.begin(v); k < neighbours.end(v) && !contact; ++k) contact = walls.mask[static_cast<std::size_t>(neighbours.items[k])] == 0;
-        amount[v] = contact ? 0.0f : 1.0f;
-    }
+std::vector<float> smoothing_amount_at_walls(const WallConstraints& walls, std::vector<float> amount) {
+    if (amount.empty()) amount.assign(walls.mask.size(), 1.0f);
+    for (std::size_t v = 0; v < walls.mask.size(); ++v)
+        if (walls.mask[v]) amount[v] = 1.0f;
     return amount;
+}
+
+CsrList smoothing_neighbours_at_walls(const WallConstraints& walls, const CsrList& neighbours) {
+    const std::size_t nv = neighbours.rows();
+    if (walls.mask.size() != nv) return neighbours;
+    std::vector<uint8_t> contact(nv, 0);
+    for (std::size_t v = 0; v < nv; ++v)
+        if (walls.mask[v])
+            for (int64_t k = neighbours.begin(v); k < neighbours.end(v); ++k)
+                if (walls.mask[static_cast<std::size_t>(neighbours.items[k])] == 0) contact[v] = 1;
+    CsrList out;
+    out.offsets.reserve(nv + 1);
+    out.items.reserve(neighbours.items.size());
+    std::vector<int32_t> row;
+    for (std::size_t v = 0; v < nv; ++v) {
+        row.clear();
+        for (int64_t k = neighbours.begin(v); k < neighbours.end(v); ++k) {
+            const int32_t u = neighbours.items[k];
+            if (!contact[v] || contact[static_cast<std::size_t>(u)]) row.push_back(u);
+        }
+        if (contact[v] && row.size() < 2) row.clear();
+        out.items.insert(out.items.end(), row.begin(), row.end());
+        out.offsets.push_back(static_cast<int64_t>(out.items.size()));
+    }
+    return out;
 }
 
 std::size_t cut_open_at_box(TriMesh& mesh, const Vector3& lower, const Vector3& upper, bool clamp_vertices) {

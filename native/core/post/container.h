@@ -22,11 +22,15 @@ WallConstraints find_wall_vertices(const TriMesh& mesh, const Vector3& lower, co
 // A move that would leave a triangle without area is not made. Updates the mask; returns the vertices moved.
 std::size_t square_box_edges(TriMesh& mesh, WallConstraints& walls);
 
-// How much smoothing moves each vertex (`amount`, empty: 1 everywhere), adjusted on the walls. The cap is flat, not
-// a free surface: its vertices get 1 (they slide along the wall, evening out its triangles). The contact line (wall
-// vertices with a neighbour off the walls) gets 0: it is where the raw surface meets the wall, and pulled along the
-// wall by the cap it would drag the free surface down into a fillet.
-std::vector<float> smoothing_amount_at_walls(const WallConstraints& walls, const CsrList& neighbours, std::vector<float> amount);
+// How much smoothing moves each vertex (`amount`, empty: 1 everywhere), on the walls: 1, since a wall is flat, not
+// a free surface (its particles' counts, cut off by the wall, would call it one).
+std::vector<float> smoothing_amount_at_walls(const WallConstraints& walls, std::vector<float> amount);
+
+// The neighbours smoothing averages over, with walls. The contact line (wall vertices with a neighbour off the
+// walls) is smoothed along itself only: over its neighbours on the contact line, none when it has fewer than two.
+// Marching cubes leaves it as a staircase of lattice points on the wall, which this straightens; the cap, pulling it
+// along the wall, would drag the free surface down into a fillet. Other vertices keep all their neighbours.
+CsrList smoothing_neighbours_at_walls(const WallConstraints& walls, const CsrList& neighbours);
 
 // Open cut: removes the triangles with all three vertices outside the box and the vertices no triangle uses
 // (normals and attributes follow); with clamp_vertices, then moves the vertices outside onto the box's faces.
