@@ -1,5 +1,6 @@
 #include "pipeline.h"
 
+#include <algorithm>
 #include <string>
 #include <utility>
 
@@ -39,19 +40,22 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
     if (options.keep_raw_mesh) result.raw_mesh = mesh;
 
     // Capped: the vertices on the walls, held there by every later stage. Cleanup and decimation leave them in place
-    // (pinned), so after each they are found again by their exact coordinates.
+    // (pinned), so after each they are found again by their exact coordinates. None (a box around all the fluid):
+    // an empty mask, and every stage runs as without a box.
     WallConstraints walls;
     const auto find_walls = [&] {
-        if (capped) walls = find_wall_vertices(mesh, *container.mesh_aabb_min, *container.mesh_aabb_max, threads);
+        if (!capped) return;
+        walls = find_wall_vertices(mesh, *container.mesh_aabb_min, *container.mesh_aabb_max, threads);
+        if (std::none_of(walls.mask.begin(), walls.mask.end(), [](uint8_t faces) { return faces != 0; })) walls.mask.clear();
     };
     find_walls();
-    if (capped) stats.set_count("container_edge_vertices", static_cast<double>(square_box_edges(mesh, walls)));
-    const std::vector<uint8_t>* pinned = capped ? &walls.mask : nullptr;
+    if (!walls.empty()) stats.set_count("container_edge_vertices", static_cast<double>(square_box_edges(mesh, walls)));
+    const auto pinned = [&] { return walls.empty() ? nullptr : &walls.mask; };
 
     // Mesh cleanup and barnacle decimation (Sec. 3.3): the slivers marching cubes leaves at grid points.
     if (post.mesh_cleanup) {
         StageTimer timer(&stats, "mesh cleanup");
-        const std::size_t removed = mesh_cleanup(mesh, surface.cube_edge(), post.mesh_cleanup_snap_distance, threads, pinned);
+        const std::size_t removed = mesh_cleanup(mesh, surface.cube_edge(), post.mesh_cleanup_snap_distance, threads, pinned());
         stats.set_count("cleanup_removed_vertices", static_cast<double>(removed));
         find_walls();
     }
@@ -59,7 +63,7 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
     MeshAdjacency adjacency;
     if (post.decimate_barnacles) {
         StageTimer timer(&stats, "decimation");
-        const std::size_t removed = decimate_barnacles(mesh, threads, &adjacency, pinned);
+        const std::size_t removed = decimate_barnacles(mesh, threads, &adjacency, pinned());
         stats.set_count("decimated_configurations", static_cast<double>(removed));
         find_walls();
     }
@@ -83,7 +87,7 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
     }
     if (post.output_weights) mesh.attributes.push_back({"weights", 1, weights});
     std::vector<float> smoothing_amount = post.smoothing_weights ? std::move(weights) : std::vector<float>{};
-    if (capped && post.smoothing_iterations > 0)
+    if (!walls.empty() && post.smoothing_iterations > 0)
         smoothing_amount = smoothing_amount_at_walls(walls, std::move(smoothing_amount));
 
     // Weighted Laplacian smoothing (Eq. 3-5), remembering the surface it started from.
@@ -92,9 +96,9 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         StageTimer timer(&stats, "smoothing");
         unsmoothed = record_unsmoothed_surface(mesh, threads);
         MeshAdjacency along_walls;  // capped: the contact line smoothed along itself (post/container.h)
-        if (capped) along_walls.vertex_neighbours = smoothing_neighbours_at_walls(walls, adjacency.vertex_neighbours);
-        laplacian_smooth(mesh, capped ? along_walls : adjacency, smoothing_amount, post.smoothing_iterations, post.smoothing_strength, threads,
-                         capped ? &walls : nullptr);
+        if (!walls.empty()) along_walls.vertex_neighbours = smoothing_neighbours_at_walls(walls, adjacency.vertex_neighbours);
+        laplacian_smooth(mesh, walls.empty() ? adjacency : along_walls, smoothing_amount, post.smoothing_iterations, post.smoothing_strength, threads,
+                         walls.empty() ? nullptr : &walls);
     }
 
     // Volume restoration: each component's volume back, along smoothed normals the normals stage may take.
@@ -104,14 +108,14 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         // Vertices on a wall do not move along normals (which leave the wall): the rest of the surface restores the
         // volume, so the step's estimate must not count their area.
         std::vector<float> amount;
-        if (capped) {
+        if (!walls.empty()) {
             amount = smoothing_amount.empty() ? std::vector<float>(mesh.num_vertices(), 1.0f) : smoothing_amount;
             for (std::size_t v = 0; v < walls.mask.size(); ++v)
                 if (walls.mask[v]) amount[v] = 0.0f;
         }
-        restoration_normals = restore_component_volumes(mesh, adjacency, unsmoothed, capped ? amount : smoothing_amount, surface.compact_support(),
+        restoration_normals = restore_component_volumes(mesh, adjacency, unsmoothed, walls.empty() ? smoothing_amount : amount, surface.compact_support(),
                                                         restoration_normal_iterations(post), threads,
-                                                        capped ? &walls : nullptr);
+                                                        walls.empty() ? nullptr : &walls);
     }
 
     // Capped, every vertex stays inside the box: volume restoration moves vertices near a wall along normals that may

@@ -206,6 +206,21 @@ TEST_CASE("capped container: the same bits for 1 and 2 threads", "[container][de
     CHECK(one.mesh.normals == two.mesh.normals);
 }
 
+TEST_CASE("a box around all the fluid changes nothing, bit for bit", "[container]") {
+    const std::vector<float> particles = fluid_block();
+    PipelineOptions options = container_options(2);
+    const PipelineResult around = [&] {
+        options.container.mesh_aabb_min = Vector3{-1.0, -1.0, -1.0};
+        options.container.mesh_aabb_max = Vector3{2.0, 2.0, 2.0};
+        return run(particles, options);
+    }();
+    options.container = ContainerParams{};
+    const PipelineResult none = run(particles, options);
+    REQUIRE(none.mesh.num_triangles() > 0);
+    CHECK(mesh_hash(around.mesh) == mesh_hash(none.mesh));
+    CHECK(around.mesh.normals == none.mesh.normals);
+}
+
 TEST_CASE("open cut: triangles outside removed and the cut left open, clamping puts the rest on the walls", "[container]") {
     const std::vector<float> particles = fluid_block();
     PipelineOptions options = container_options(2);
