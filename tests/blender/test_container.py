@@ -5,6 +5,7 @@ Run: tests/blender/run.sh (installs the add-on from its zip first; see _support.
 """
 import os
 import sys
+import tempfile
 
 import bpy
 import numpy as np
@@ -15,7 +16,8 @@ from _support import check  # noqa: E402
 
 addon = _support.enable_addon()
 api = addon.api
-update, container = _support.addon_modules(addon, "blender.update", "blender.container")
+update, container, bake = _support.addon_modules(addon, "blender.update", "blender.container", "blender.bake")
+_temporary = tempfile.TemporaryDirectory(prefix="meniscus_container_")
 
 _support.clear_scene()
 scene = bpy.context.scene
@@ -87,6 +89,47 @@ def test_the_cut_follows_the_cubes_animation():
         scene.frame_set(30)
 
 
+def test_moving_the_cube_rebuilds_the_surface():
+    start = cube.location.copy()
+    try:
+        scene.frame_set(30)
+        cube.location.x += 0.1 * (high[0] - low[0])
+        bpy.context.view_layer.update()  # the depsgraph update handler sees the container move
+        lower, upper = cube_bounds()
+        check(vertices_inside(lower, upper), f"after moving the cube, vertices outside its bounds; status: {settings.status}")
+        check(world_vertices(surface)[:, 0].max() > box_high[0] + 1e-3, "the surface still ends at the cube's old wall")
+    finally:
+        cube.location = start
+        bpy.context.view_layer.update()
+
+
+def test_a_bake_follows_the_cubes_animation():
+    start = cube.location.copy()
+    shift = 0.1 * (high[0] - low[0])
+    cube.keyframe_insert("location", frame=30)
+    cube.location.x += shift
+    cube.keyframe_insert("location", frame=31)
+    scene.frame_set(30)
+    settings.cache_pattern = os.path.join(_temporary.name, "cache", "tank_####.npz")
+    try:
+        job = bake.bake_surface(surface, scene, 30, 31)
+        check(job.completed == 2 and not job.failures, f"{job.completed} frames, failures {job.failures}")
+        check(scene.frame_current == 30, "the bake must leave the scene at its frame")
+        for frame, moved in ((30, 0.0), (31, shift)):
+            lower = np.array(box_low) + [moved, 0, 0]
+            upper = np.array(box_high) + [moved, 0, 0]
+            vertices = addon.cache.load_mesh(settings.cache_pattern.replace("####", f"{frame:04d}")).vertices
+            check(len(vertices) > 0 and np.all((vertices >= lower - 1e-5) & (vertices <= upper + 1e-5)),
+                  f"frame {frame}: baked vertices outside the cube's bounds at that frame")
+            check(np.abs(vertices[:, 0] - upper[0]).min() < 1e-5, f"frame {frame}: no vertex on the moved wall")
+    finally:
+        settings.use_cache = False
+        settings.cache_pattern = ""
+        cube.animation_data_clear()
+        cube.location = start
+        scene.frame_set(30)
+
+
 def test_drop_particles_outside_and_no_container():
     settings.use_container_particle_box = True
     arguments = update.reconstruction_arguments(settings, for_render=False)
@@ -101,6 +144,7 @@ def test_drop_particles_outside_and_no_container():
 
 
 def _cleanup():
+    _temporary.cleanup()
     addon.unregister()
 
 
