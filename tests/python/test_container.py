@@ -96,3 +96,13 @@ def test_add_on_container_bounds_follow_rotation_and_scale_without_blender():
     lower, upper = container.world_bounds(corners, matrix)
     np.testing.assert_allclose(lower, (10 - 3 * c, -3 * s, -4), atol=1e-12)
     np.testing.assert_allclose(upper, (10 + 3 * c, 3 * s, 2), atol=1e-12)
+
+
+def test_particle_box_filters_the_attributes_alongside():
+    block = fluid_block()
+    ids = np.arange(len(block), dtype=np.int32)
+    mesh = meniscus.reconstruct(block, RADIUS, particle_aabb_min=(-1, -1, -1), particle_aabb_max=(0.3, 10, 10),
+                                attributes={"id": ids})
+    kept = set(ids[block[:, 0] <= 0.3].tolist())
+    assert mesh.attributes["id"].dtype == np.int32
+    assert set(np.unique(mesh.attributes["id"]).tolist()) <= kept  # carried from kept particles only
