@@ -155,6 +155,9 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
                                                            mesh, *container.mesh_aabb_min, *container.mesh_aabb_max, container.mesh_aabb_clamp_verts)));
     }
 
+    if (mesh_box && mesh.num_triangles() == 0 && reconstruction.grid.size() > 0)
+        stats.warnings.push_back("the fluid's surface lies entirely outside the mesh box (mesh_aabb_min/max): the mesh is empty");
+
     // The last line of defence for the host application (post/vertex_guard.h).
     const std::size_t clamped = keep_vertices_near_particles(mesh, reconstruction.grid, surface.compact_support() + 2.0 * surface.cube_edge());
     if (clamped > 0)

@@ -206,6 +206,21 @@ TEST_CASE("capped container: the same bits for 1 and 2 threads", "[container][de
     CHECK(one.mesh.normals == two.mesh.normals);
 }
 
+TEST_CASE("a mesh box away from the fluid gives an empty mesh and says why", "[container]") {
+    const std::vector<float> particles = fluid_block();
+    PipelineOptions options = container_options(2);
+    for (const bool cap : {true, false}) {
+        options.container.mesh_aabb_cap = cap;
+        options.container.mesh_aabb_min = Vector3{5.0, 5.0, 5.0};
+        options.container.mesh_aabb_max = Vector3{6.0, 6.0, 6.0};
+        const PipelineResult result = run(particles, options);
+        CHECK(result.mesh.num_triangles() == 0);
+        CHECK(result.mesh.num_vertices() == 0);
+        REQUIRE(!result.stats.warnings.empty());
+        CHECK(result.stats.warnings.back().find("mesh_aabb_min/max") != std::string::npos);
+    }
+}
+
 TEST_CASE("a box around all the fluid changes nothing, bit for bit", "[container]") {
     const std::vector<float> particles = fluid_block();
     PipelineOptions options = container_options(2);
