@@ -82,7 +82,12 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         StageTimer timer(&stats, "weights");
         const std::vector<float>& counts = reconstruction.densities.neighbor_counts;
         result.weights_normalization = halfspace_normalization(counts, surface.iso_threshold, post.weights_normalization);
-        weights = feature_weights(particles, counts, mesh.vertices, result.weights_normalization, post.weights_smoothstep, threads);
+        // N_HS from the particles as they are; the counts the weights read, mirrored at the walls (post/container.h).
+        const std::vector<float> mirrored = walls.empty() ? std::vector<float>{}
+                                                          : counts_mirrored_at_walls(reconstruction.grid, counts, *container.mesh_aabb_min,
+                                                                                     *container.mesh_aabb_max, surface.compact_support(), threads);
+        weights = feature_weights(particles, walls.empty() ? counts : mirrored, mesh.vertices, result.weights_normalization,
+                                  post.weights_smoothstep, threads);
         stats.set_count("weights_normalization", result.weights_normalization);
     }
     if (post.output_weights) mesh.attributes.push_back({"weights", 1, weights});

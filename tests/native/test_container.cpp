@@ -221,6 +221,37 @@ TEST_CASE("a mesh box away from the fluid gives an empty mesh and says why", "[c
     }
 }
 
+TEST_CASE("at a tank wall the free surface keeps the weights of flat fluid", "[container][weights]") {
+    // Particles filling [0, 0.8]^2 x [0, 0.4] and ending there, as in a tank whose walls are the box's.
+    std::vector<float> particles;
+    for (int z = 0; z < 8; ++z)
+        for (int y = 0; y < 16; ++y)
+            for (int x = 0; x < 16; ++x)
+                for (double c : {kRadius * (1 + 2 * x), kRadius * (1 + 2 * y), kRadius * (1 + 2 * z)}) particles.push_back(static_cast<float>(c));
+    PipelineOptions options = container_options(2);
+    options.container.mesh_aabb_min = Vector3{0.0, 0.0, 0.0};
+    options.container.mesh_aabb_max = Vector3{0.8, 0.8, 1.0};
+    options.postprocess.output_weights = true;
+    options.postprocess.smoothing_iterations = 0;
+    // The lowest weight on the top surface within a kernel support of the wall x = 0 (off the wall itself).
+    const auto lowest_near_wall = [](const TriMesh& mesh) {
+        const Attribute* weights = find_attribute(mesh.attributes, "weights");
+        REQUIRE(weights != nullptr);
+        float lowest = 2.0f;
+        for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
+            const float* p = &mesh.vertices[3 * v];
+            if (p[2] > 0.39f && p[0] > 0.0f && p[0] < 0.1f && p[1] > 0.3f && p[1] < 0.5f) lowest = std::min(lowest, weights->values[v]);
+        }
+        return lowest;
+    };
+    const float in_tank = lowest_near_wall(run(particles, options).mesh);
+    options.container = ContainerParams{};
+    const float free_edge = lowest_near_wall(run(particles, options).mesh);
+    INFO("lowest weight next to the wall: " << in_tank << " in the tank, " << free_edge << " at the block's free edge");
+    CHECK(in_tank >= 0.99f);
+    CHECK(free_edge < 0.95f);  // without the wall the same place is the block's edge: a feature
+}
+
 TEST_CASE("a box around all the fluid changes nothing, bit for bit", "[container]") {
     const std::vector<float> particles = fluid_block();
     PipelineOptions options = container_options(2);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -41,6 +42,44 @@ WallConstraints find_wall_vertices(const TriMesh& mesh, const Vector3& lower, co
         walls.mask[static_cast<std::size_t>(v)] = faces;
     });
     return walls;
+}
+
+std::vector<float> counts_mirrored_at_walls(const ParticleGrid& grid, const std::vector<float>& counts, const Vector3& lower,
+                                            const Vector3& upper, double support, int threads) {
+    std::vector<float> out = counts;
+    if (counts.size() != grid.size()) return out;
+    const double planes[6] = {lower[0], upper[0], lower[1], upper[1], lower[2], upper[2]};
+    parallel_for(static_cast<int64_t>(grid.size()), threads, [&](int64_t j) {
+        const float* x = grid.position(static_cast<std::size_t>(j));
+        double change = 0.0;
+        for (int f = 0; f < 6; ++f) {
+            const int k = f / 2;
+            const double inside = f % 2 ? planes[f] - x[k] : x[k] - planes[f];  // distance to the wall, inside > 0
+            if (!(inside >= 0.0 && inside < support)) continue;
+            float m[3] = {x[0], x[1], x[2]};
+            m[k] = static_cast<float>(2.0 * planes[f] - x[k]);
+            // Cells holding the particles within the support of x or of its image.
+            float lo[3], hi[3];
+            for (int a = 0; a < 3; ++a) {
+                lo[a] = static_cast<float>(std::min(x[a], m[a]) - support);
+                hi[a] = static_cast<float>(std::max(x[a], m[a]) + support);
+            }
+            grid.for_each_cell_in_box(grid.cell_of(lo), grid.cell_of(hi), [&](std::size_t cell) {
+                for (std::size_t i = grid.cell_begin(cell); i < grid.cell_end(cell); ++i) {
+                    const float* y = grid.position(i);
+                    const bool beyond = f % 2 ? y[k] > planes[f] : y[k] < planes[f];
+                    const float* centre = beyond ? x : m;  // a real neighbour beyond goes, an image of one inside comes
+                    double d2 = 0.0;
+                    for (int a = 0; a < 3; ++a) d2 += (double(y[a]) - centre[a]) * (double(y[a]) - centre[a]);
+                    if (d2 >= support * support) continue;
+                    const double hat = 1.0 - std::sqrt(d2) / support;
+                    change += beyond ? -hat : hat;
+                }
+            });
+        }
+        out[static_cast<std::size_t>(j)] = static_cast<float>(std::max(0.0, double(counts[static_cast<std::size_t>(j)]) + change));
+    });
+    return out;
 }
 
 std::size_t square_box_edges(TriMesh& mesh, WallConstraints& walls) {

@@ -9,6 +9,7 @@
 #include "mesh/mesh.h"
 #include "parameters.h"
 #include "post/wall_constraints.h"
+#include "sph/neighborhood.h"
 
 namespace meniscus {
 
@@ -21,6 +22,14 @@ WallConstraints find_wall_vertices(const TriMesh& mesh, const Vector3& lower, co
 // first in WallConstraints' order moves), so both caps reach the edge and the bevel's faces lie on the other wall.
 // A move that would leave a triangle without area is not made. Updates the mask; returns the vertices moved.
 std::size_t square_box_edges(TriMesh& mesh, WallConstraints& walls);
+
+// The particles' hat-weighted neighbour counts (sorted order, Eq. 10-11) as if the fluid were mirrored at the walls:
+// for a particle within the kernel support of a wall, the neighbours beyond the wall are replaced by the mirror
+// images of those inside. Particles that end at a tank wall then count as bulk there, so the feature weights do not
+// take the free surface next to the wall for a thin feature (the wall side is not a free surface). Diagonal images
+// at the box's edges and corners are left out.
+std::vector<float> counts_mirrored_at_walls(const ParticleGrid& grid, const std::vector<float>& counts, const Vector3& lower,
+                                            const Vector3& upper, double support, int threads);
 
 // How much smoothing moves each vertex (`amount`, empty: 1 everywhere), on the walls: 1, since a wall is flat, not
 // a free surface (its particles' counts, cut off by the wall, would call it one).
