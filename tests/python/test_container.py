@@ -106,3 +106,29 @@ def test_particle_box_filters_the_attributes_alongside():
     kept = set(ids[block[:, 0] <= 0.3].tolist())
     assert mesh.attributes["id"].dtype == np.int32
     assert set(np.unique(mesh.attributes["id"]).tolist()) <= kept  # carried from kept particles only
+
+
+def test_a_sloped_contact_line_is_straightened_on_the_wall():
+    # Fluid whose top rises along x (stepped by the particle layers) against the wall y = LOWER[1]: where the free
+    # surface meets the wall, marching cubes leaves a staircase; smoothing along the contact line straightens it.
+    columns = [(x, y, z) for x in range(24) for y in range(12) for z in range(40)
+               if RADIUS * (1 + 2 * z) <= 0.2 + 0.25 * (x * 2 * RADIUS)]
+    block = (RADIUS * (1 + 2 * np.array(columns))).astype(np.float32)
+    lower, upper = (0.1031, LOWER[1], -1.0), (1.1, UPPER[1], 2.0)
+
+    def contact_line_roughness(mesh):
+        on_wall = mesh.vertices[:, 1] == np.float32(lower[1])
+        edges = np.concatenate([mesh.triangles[:, [0, 1]], mesh.triangles[:, [1, 2]], mesh.triangles[:, [2, 0]]])
+        crossing = edges[on_wall[edges[:, 0]] & ~on_wall[edges[:, 1]], 0]  # wall vertices next to the free surface
+        x, z = mesh.vertices[crossing, 0], mesh.vertices[crossing, 2]
+        keep = (x > 0.2) & (x < 1.0) & (z > 0.15)  # the sloped top, away from the other walls
+        x, z = x[keep], z[keep]
+        return np.std(z - np.polyval(np.polyfit(x, z, 1), x)), len(x)
+
+    raw = meniscus.reconstruct(block, RADIUS, mesh_aabb_min=lower, mesh_aabb_max=upper, smoothing_iterations=0,
+                               decimate_barnacles=False)
+    smoothed = meniscus.reconstruct(block, RADIUS, mesh_aabb_min=lower, mesh_aabb_max=upper)
+    (before, n_before), (after, n_after) = contact_line_roughness(raw), contact_line_roughness(smoothed)
+    assert n_before > 50 and n_after > 50
+    assert meniscus.check_mesh(smoothed)["ok"]
+    assert after < 0.4 * before, (before, after)  # measured: 0.0128 -> 0.0031
