@@ -1,10 +1,12 @@
 #include "pipeline.h"
 
+#include <algorithm>
 #include <string>
 #include <utility>
 
 #include "base/parallel.h"
 #include "mesh/adjacency.h"
+#include "post/container.h"
 #include "post/decimation.h"
 #include "post/heat_smoothing.h"
 #include "post/mesh_cleanup.h"
@@ -31,7 +33,11 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
     if (positions.count == 0) stats.warnings.push_back("no particles: the mesh is empty");
 
     // Particles -> marching-cubes mesh (its stages time themselves: neighborhood, density, level set and marching cubes).
-    SurfaceReconstruction reconstruction = reconstruct_surface(positions, surface, options.execution, &stats);
+    // The container's particle box drops particles there; a capped mesh box closes the surface on its walls.
+    const ContainerParams& container = options.container;
+    const bool mesh_box = container.mesh_aabb_min && container.mesh_aabb_max;
+    const bool capped = mesh_box && container.mesh_aabb_cap;
+    SurfaceReconstruction reconstruction = reconstruct_surface(positions, surface, options.execution, &stats, &container);
     const SphField particles = reconstruction.sph_field();
     TriMesh mesh = std::move(reconstruction.mesh);
     if (options.keep_raw_mesh) result.raw_mesh = mesh;
@@ -45,18 +51,33 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         stats.set_count("stray_volume_removed", strays.volume);
     }
 
+    // Capped: the vertices on the walls, held there by every later stage. Cleanup and decimation leave them in place
+    // (pinned), so after each they are found again by their exact coordinates. None (a box around all the fluid):
+    // an empty mask, and every stage runs as without a box.
+    WallConstraints walls;
+    const auto find_walls = [&] {
+        if (!capped) return;
+        walls = find_wall_vertices(mesh, *container.mesh_aabb_min, *container.mesh_aabb_max, threads);
+        if (std::none_of(walls.mask.begin(), walls.mask.end(), [](uint8_t faces) { return faces != 0; })) walls.mask.clear();
+    };
+    find_walls();
+    if (!walls.empty()) stats.set_count("container_edge_vertices", static_cast<double>(square_box_edges(mesh, walls)));
+    const auto pinned = [&] { return walls.empty() ? nullptr : &walls.mask; };
+
     // Mesh cleanup and barnacle decimation (Sec. 3.3): the slivers marching cubes leaves at grid points.
     if (post.mesh_cleanup) {
         StageTimer timer(&stats, "mesh cleanup");
-        const std::size_t removed = mesh_cleanup(mesh, surface.cube_edge(), post.mesh_cleanup_snap_distance, threads);
+        const std::size_t removed = mesh_cleanup(mesh, surface.cube_edge(), post.mesh_cleanup_snap_distance, threads, pinned());
         stats.set_count("cleanup_removed_vertices", static_cast<double>(removed));
+        find_walls();
     }
 
     MeshAdjacency adjacency;
     if (post.decimate_barnacles) {
         StageTimer timer(&stats, "decimation");
-        const std::size_t removed = decimate_barnacles(mesh, threads, &adjacency);
+        const std::size_t removed = decimate_barnacles(mesh, threads, &adjacency, pinned());
         stats.set_count("decimated_configurations", static_cast<double>(removed));
+        find_walls();
     }
 
     // From here on the topology stays as it is: one adjacency serves smoothing, restoration and normals, built only
@@ -77,11 +98,18 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         StageTimer timer(&stats, "weights");
         const std::vector<float>& counts = reconstruction.densities.neighbor_counts;
         result.weights_normalization = halfspace_normalization(counts, surface.iso_threshold, post.weights_normalization);
-        weights = feature_weights(particles, counts, mesh.vertices, result.weights_normalization, post.weights_smoothstep, threads);
+        // N_HS from the particles as they are; the counts the weights read, mirrored at the walls (post/container.h).
+        const std::vector<float> mirrored = walls.empty() ? std::vector<float>{}
+                                                          : counts_mirrored_at_walls(reconstruction.grid, counts, *container.mesh_aabb_min,
+                                                                                     *container.mesh_aabb_max, surface.compact_support(), threads);
+        weights = feature_weights(particles, walls.empty() ? counts : mirrored, mesh.vertices, result.weights_normalization,
+                                  post.weights_smoothstep, threads);
         stats.set_count("weights_normalization", result.weights_normalization);
     }
     if (post.output_weights) mesh.attributes.push_back({"weights", 1, weights});
-    const std::vector<float> smoothing_amount = post.smoothing_weights ? std::move(weights) : std::vector<float>{};
+    std::vector<float> smoothing_amount = post.smoothing_weights ? std::move(weights) : std::vector<float>{};
+    if (!walls.empty() && post.smoothing_iterations > 0)
+        smoothing_amount = smoothing_amount_at_walls(walls, std::move(smoothing_amount));
 
     // Smoothing, remembering the surface it started from: the paper's explicit iterations (Eq. 3-5), or on request a
     // heat flow of a physical reach that returns its local shrinkage where it happened (post/heat_smoothing.h).
@@ -99,7 +127,7 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
             settings.volume_correction = post.volume_restoration;
             settings.normal_iterations = restoration_normal_iterations(post);
             settings.max_offset = surface.compact_support();
-            settings.walls = nullptr;  // the container box's walls (post/wall_constraints.h) go here once it makes them
+            settings.walls = walls.empty() ? nullptr : &walls;  // capped: wall vertices slide along their walls
             const HeatSmoothingReport report = heat_smooth(mesh, adjacency, smoothing_amount, settings, unsmoothed, threads);
             // Its final correction moved the vertices along these normals; the normals stage takes them when they fit.
             restoration_normals = report.normals;
@@ -107,7 +135,10 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
             stats.set_count("smoothing_equivalent_iterations", report.iterations);
             stats.set_count("smoothing_applications", report.applications);
         } else {
-            laplacian_smooth(mesh, adjacency, smoothing_amount, post.smoothing_iterations, post.smoothing_strength, threads);
+            MeshAdjacency along_walls;  // capped: the contact line smoothed along itself (post/container.h)
+            if (!walls.empty()) along_walls.vertex_neighbours = smoothing_neighbours_at_walls(walls, adjacency.vertex_neighbours);
+            laplacian_smooth(mesh, walls.empty() ? adjacency : along_walls, smoothing_amount, post.smoothing_iterations, post.smoothing_strength, threads,
+                             walls.empty() ? nullptr : &walls);
         }
     }
 
@@ -115,9 +146,24 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
     // flow makes its own, smaller correction above).
     if (post.smoothing_iterations > 0 && post.volume_restoration && !heat) {
         StageTimer timer(&stats, "volume restoration");
-        restoration_normals = restore_component_volumes(mesh, adjacency, unsmoothed, smoothing_amount, surface.compact_support(),
-                                                        restoration_normal_iterations(post), threads);
+        // Vertices on a wall do not move along normals (which leave the wall): the rest of the surface restores the
+        // volume, so the step's estimate must not count their area.
+        std::vector<float> amount;
+        if (!walls.empty()) {
+            amount = smoothing_amount.empty() ? std::vector<float>(mesh.num_vertices(), 1.0f) : smoothing_amount;
+            for (std::size_t v = 0; v < walls.mask.size(); ++v)
+                if (walls.mask[v]) amount[v] = 0.0f;
+        }
+        restoration_normals = restore_component_volumes(mesh, adjacency, unsmoothed, walls.empty() ? smoothing_amount : amount, surface.compact_support(),
+                                                        restoration_normal_iterations(post), threads,
+                                                        walls.empty() ? nullptr : &walls);
     }
+
+    // Capped, every vertex stays inside the box: volume restoration moves vertices near a wall along normals that may
+    // point through it. Before the collapse guard, which reverts a component this leaves with a flat triangle.
+    if (capped && post.smoothing_iterations > 0)
+        stats.set_count("container_clamped_vertices",
+                        static_cast<double>(clamp_into_box(mesh, *container.mesh_aabb_min, *container.mesh_aabb_max)));
 
     // The collapse guard: a component that smoothing collapsed gets its unsmoothed positions back.
     if (post.smoothing_iterations > 0) {
@@ -142,6 +188,16 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
         for (Attribute& transferred : transfer_attributes(particles, attributes, mesh.vertices, threads))
             mesh.attributes.push_back(std::move(transferred));
     }
+
+    // The open mesh box: the surface is cut there like splashsurf's.
+    if (mesh_box && !capped) {
+        StageTimer timer(&stats, "container");
+        stats.set_count("container_removed_triangles", static_cast<double>(cut_open_at_box(
+                                                           mesh, *container.mesh_aabb_min, *container.mesh_aabb_max, container.mesh_aabb_clamp_verts)));
+    }
+
+    if (mesh_box && mesh.num_triangles() == 0 && reconstruction.grid.size() > 0)
+        stats.warnings.push_back("the fluid's surface lies entirely outside the mesh box (mesh_aabb_min/max): the mesh is empty");
 
     // Quads last: merging faces moves no vertex, so normals and attributes stay as they are.
     if (post.generate_quads) {

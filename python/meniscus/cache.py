@@ -164,6 +164,7 @@ class BakeTask:
     frame: int          # file frame number (the cache file gets the same number)
     source: str         # particle file
     target: str         # mesh file to write
+    arguments: Optional[dict] = None  # this frame's own keyword arguments over the job's (a moving container's box)
 
 
 @dataclass
@@ -216,7 +217,8 @@ class BakeJob:
         started = time.perf_counter()
         result = None
         try:
-            result = reconstruct_file(task.source, self.arguments, self.wanted_attributes)
+            arguments = {**self.arguments, **task.arguments} if task.arguments else self.arguments
+            result = reconstruct_file(task.source, arguments, self.wanted_attributes)
             save_mesh(result.mesh, task.target)
         except (api.FormatError, OSError, MemoryError, ValueError) as error:
             self.failures[task.frame] = str(error) or type(error).__name__

@@ -30,7 +30,8 @@ def meniscus_depsgraph_update_post(scene, depsgraph=None):
             return
         for obj in surface_objects(scene):
             settings = obj.meniscus
-            if settings.source_type == "OBJECT" and not settings.use_cache and settings.source_object in updated:
+            live_source = settings.source_type == "OBJECT" and settings.source_object in updated
+            if not settings.use_cache and (live_source or settings.container_object in updated):
                 update.update_surface(obj, scene, depsgraph=depsgraph)
     except Exception:
         traceback.print_exc()

@@ -9,6 +9,7 @@ script or the command line the same bake runs synchronously:
 
 Either way the surface switches to "Play From Cache" afterwards, and the .blend (if saved) renders from the cache.
 """
+import dataclasses
 import os
 
 import bpy
@@ -16,7 +17,7 @@ from bpy.props import BoolProperty, IntProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
 from .. import cache, sequence
-from . import operators, surfaces, update
+from . import container, operators, surfaces, update
 
 # Running UI bakes by object name (names, not references: undo and file loads invalidate object references).
 _jobs = {}
@@ -48,7 +49,34 @@ def _cache_pattern_for_bake(obj):
         raise BakeError(f"Cache Files: {error}") from None
 
 
-def prepare_bake(obj, frame_start=None, frame_end=None):
+def _moves(obj):
+    # Animated itself or through a parent, or constrained: its bounds may differ from frame to frame.
+    while obj is not None:
+        animation = obj.animation_data
+        if len(obj.constraints) or (animation is not None and (animation.action is not None or len(animation.drivers))):
+            return True
+        obj = obj.parent
+    return False
+
+
+def _with_container_boxes(settings, scene, tasks):
+    """The tasks with the container's box at each one's frame when the container moves (the bake runs outside
+    Blender's frame changes, so the boxes are read now, stepping the scene through the frames, rebuilding nothing)."""
+    if settings.container_object is None or scene is None or not _moves(settings.container_object):
+        return tasks
+    frame, subframe = scene.frame_current, scene.frame_subframe
+    boxed = []
+    with update.updates_suspended():
+        try:
+            for task in tasks:
+                scene.frame_set(task.frame - settings.frame_offset)  # file frame = scene frame + offset
+                boxed.append(dataclasses.replace(task, arguments=container.box_arguments(settings)))
+        finally:
+            scene.frame_set(frame, subframe=subframe)
+    return boxed
+
+
+def prepare_bake(obj, frame_start=None, frame_end=None, scene=None):
     """Reads everything the bake needs from Blender data (main thread only); returns (job, stored pattern)."""
     if not surfaces.is_surface(obj):
         raise BakeError(f"'{getattr(obj, 'name', obj)}' is not a Meniscus surface")
@@ -71,6 +99,7 @@ def prepare_bake(obj, frame_start=None, frame_end=None):
         arguments = update.reconstruction_arguments(settings, for_render=True, normals=True)
     except update.SurfaceError as error:
         raise BakeError(str(error)) from None
+    tasks = _with_container_boxes(settings, scene or bpy.context.scene, tasks)
     wanted = cache.parse_attribute_names(settings.attribute_names)
     return cache.BakeJob(tasks, arguments, wanted), stored
 
@@ -98,7 +127,7 @@ def finish_bake(obj, job, stored_pattern, scene=None):
 
 def bake_surface(obj, scene=None, frame_start=None, frame_end=None, report=print):
     """Bakes synchronously (scripts, command line, render farms); returns the finished cache.BakeJob."""
-    job, stored = prepare_bake(obj, frame_start, frame_end)
+    job, stored = prepare_bake(obj, frame_start, frame_end, scene)
 
     def progress(job_, task, result):
         state = job_.failures.get(task.frame, f"{len(result.mesh.triangles):,} triangles" if result else "")

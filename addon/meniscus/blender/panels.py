@@ -192,6 +192,12 @@ class MENISCUS_PT_container(_ParameterPanel, bpy.types.Panel):
     bl_options = {"DEFAULT_CLOSED"}
     group = "container"
 
+    def draw_before(self, layout, settings):
+        layout.prop(settings, "container_object")
+        row = layout.row()
+        row.active = settings.container_object is not None
+        row.prop(settings, "use_container_particle_box")
+
 
 class MENISCUS_PT_mesh(_ParameterPanel, bpy.types.Panel):
     bl_label = "Mesh Cleanup"

@@ -12,6 +12,7 @@ import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
 from .. import cache, parameters, sequence
+from . import container
 
 # The layout of the settings, stored in each surface; files saved before the schema (0) are converted on load.
 SETTINGS_VERSION = 2
@@ -44,6 +45,16 @@ def _can_be_source(settings, obj):
     # A surface fed by its own vertices would rebuild from what it just built; other surfaces are allowed.
     # Particle systems live on mesh objects, so MESH covers them too.
     return obj != settings.id_data and obj.type in {"MESH", "POINTCLOUD"}
+
+
+def _rebuilding(kind, **keywords):
+    """A setting that is not animatable and rebuilds the surface when edited."""
+    return kind(options=set(), update=_rebuild_after_edit, **keywords)
+
+
+def _can_be_container(settings, obj):
+    # The surface itself would be cut by its own bounds, which follow the cut.
+    return obj != settings.id_data
 
 
 class MeniscusSurfaceSettings(bpy.types.PropertyGroup):
@@ -113,6 +124,15 @@ class MeniscusSurfaceSettings(bpy.types.PropertyGroup):
         options=set(),
         update=_rebuild_after_edit,
     )
+
+    # Container (the schema's boxes come from this object) ----------------------------------------------------------
+    container_object: _rebuilding(
+        PointerProperty, type=bpy.types.Object, poll=_can_be_container, name="Container",
+        description="Object whose bounds, as they are at each frame (animation included), are the container: the "
+                    "surface is cut at its walls and closed there by flat faces (or left open, see Closed At Walls)")
+    use_container_particle_box: _rebuilding(
+        BoolProperty, default=False, name="Drop Particles Outside",
+        description="Also leave out the particles outside the container's bounds before the reconstruction")
 
     # Cache -------------------------------------------------------------------------------------------------------
     use_cache: BoolProperty(
@@ -254,13 +274,13 @@ def pipeline_arguments(settings, for_render, normals=None):
     for parameter in parameters.PARAMETERS:
         if parameter.name in DRIVEN_BY_ADDON:
             continue
-        if parameter.type == "vector3":  # boxes: from the container object (container.py), unset otherwise
-            arguments[parameter.name] = None
+        if parameter.type == "vector3":  # boxes: from the container object, below
             continue
         value = getattr(settings, parameter.name)
         if parameter.automatic is not None and getattr(settings, parameter.name + "_auto"):
             value = parameters.convert(parameter, parameter.automatic)
         arguments[parameter.name] = value
+    arguments.update(container.box_arguments(settings))
     arguments["cube_size"] = getattr(settings, RENDER_CUBE_SIZE) if for_render else settings.cube_size
     arguments["normals"] = settings.use_custom_normals if normals is None else normals
     return arguments

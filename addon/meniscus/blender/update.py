@@ -8,6 +8,7 @@ Rules the update lives by (it runs inside Blender's frame change, also on the re
 - it skips the rebuild when the file and parameters are those already shown, which makes motion-blur subframes and
   repeated depsgraph updates free.
 """
+import contextlib
 import os
 import time
 import traceback
@@ -229,11 +230,27 @@ def _empty_for(mesh, lookup, scene_time, what):
     raise SurfaceError(f"Missing {what}: {lookup.expected_path}")
 
 
+_suspended = 0
+
+
+@contextlib.contextmanager
+def updates_suspended():
+    """No surface is rebuilt inside: a bake steps the scene through its frames only to read the container's bounds."""
+    global _suspended
+    _suspended += 1
+    try:
+        yield
+    finally:
+        _suspended -= 1
+
+
 def update_surface(obj, scene, force=False, depsgraph=None):
     """Makes a surface object show the scene's current frame. Never raises.
 
     Returns True when the mesh was rebuilt (or emptied), False when nothing had to be done or it was skipped.
     """
+    if _suspended:
+        return False
     try:
         settings = obj.meniscus
         mesh = obj.data

@@ -153,7 +153,18 @@ struct Candidate {
     int32_t centre = -1, partner = -1;  // partner = -1 for a single-vertex configuration
 };
 
-std::vector<Candidate> find_candidates(const MeshAdjacency& adj, int threads) {
+// Whether a configuration's centres or one-rings hold a pinned vertex.
+bool touches_pinned(const MeshAdjacency& adj, const Candidate& cand, const std::vector<uint8_t>& pinned) {
+    for (int32_t c : {cand.centre, cand.partner}) {
+        if (c < 0) continue;
+        if (pinned[c]) return true;
+        for (int64_t k = adj.vertex_neighbours.begin(c); k < adj.vertex_neighbours.end(c); ++k)
+            if (pinned[adj.vertex_neighbours.items[k]]) return true;
+    }
+    return false;
+}
+
+std::vector<Candidate> find_candidates(const MeshAdjacency& adj, int threads, const std::vector<uint8_t>* pinned) {
     const int64_t nv = static_cast<int64_t>(adj.vertex_neighbours.rows());
     std::vector<int32_t> kind(static_cast<std::size_t>(nv), -2);  // -2 none, -1 single, >= 0 double partner
     parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
@@ -167,8 +178,11 @@ std::vector<Candidate> find_candidates(const MeshAdjacency& adj, int threads) {
         }
     });
     std::vector<Candidate> out;
-    for (int64_t v = 0; v < nv; ++v)
-        if (kind[v] != -2) out.push_back({static_cast<int32_t>(v), kind[v] >= 0 ? kind[v] : -1});
+    for (int64_t v = 0; v < nv; ++v) {
+        if (kind[v] == -2) continue;
+        const Candidate cand{static_cast<int32_t>(v), kind[v] >= 0 ? kind[v] : -1};
+        if (!pinned || !touches_pinned(adj, cand, *pinned)) out.push_back(cand);
+    }
     return out;
 }
 
@@ -298,7 +312,7 @@ std::size_t count_double_vertex_configurations(const TriMesh& mesh) {
 }
 
 
-std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_adjacency) {
+std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_adjacency, const std::vector<uint8_t>* pinned) {
     validate_mesh_arrays(mesh, "decimate_barnacles");
     if (final_adjacency) *final_adjacency = MeshAdjacency{};
     threads = resolve_threads(threads);
@@ -313,7 +327,7 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
     MeshAdjacency adj = working_adjacency(triangles, positions, threads);
     bool adjacency_is_current = true;  // adj describes the working triangles as they are now
     for (int pass = 0; pass < kMaxDetectionPasses; ++pass) {
-        const std::vector<Candidate> candidates = find_candidates(adj, threads);
+        const std::vector<Candidate> candidates = find_candidates(adj, threads, pinned);
         if (candidates.empty()) break;
         const int32_t pass_first_stamp = claim_stamp;
         const std::vector<Candidate> selected = select_disjoint(adj, candidates, claim, claim_stamp);

@@ -42,7 +42,8 @@ struct LatticePoints {
     bool merge_partners(int32_t u, int32_t v) const { return eligible[u] && eligible[v] && key[u] == key[v]; }
 };
 
-LatticePoints nearest_lattice_points(const std::vector<float>& positions, double cube_edge, double snap_distance, int threads) {
+LatticePoints nearest_lattice_points(const std::vector<float>& positions, double cube_edge, double snap_distance, int threads,
+                                     const std::vector<uint8_t>* pinned) {
     const int64_t nv = static_cast<int64_t>(positions.size() / 3);
     LatticePoints lattice;
     lattice.key.resize(static_cast<std::size_t>(nv));
@@ -58,7 +59,7 @@ LatticePoints nearest_lattice_points(const std::vector<float>& positions, double
                 lattice.key[v].k[k] = static_cast<int32_t>(r);
                 d2 += (x - r) * (x - r);
             }
-            lattice.eligible[v] = usable && (snap_distance < 0.0 || std::sqrt(d2) <= snap_distance);
+            lattice.eligible[v] = usable && (snap_distance < 0.0 || std::sqrt(d2) <= snap_distance) && !(pinned && (*pinned)[v]);
         }
     });
     return lattice;
@@ -210,7 +211,7 @@ std::size_t merge_round(LatticeMerger& merger, const std::vector<Tiling>& tiling
 
 }  // namespace
 
-std::size_t mesh_cleanup(TriMesh& mesh, double cube_edge, double snap_distance, int threads) {
+std::size_t mesh_cleanup(TriMesh& mesh, double cube_edge, double snap_distance, int threads, const std::vector<uint8_t>* pinned) {
     validate_mesh_arrays(mesh, "mesh_cleanup");
     if (!(cube_edge > 0.0) || !std::isfinite(cube_edge))
         throw InputError("mesh_cleanup: cube_edge must be positive and finite, got " + std::to_string(cube_edge));
@@ -222,7 +223,7 @@ std::size_t mesh_cleanup(TriMesh& mesh, double cube_edge, double snap_distance, 
     std::vector<int32_t> triangles = mesh.triangles;
     std::vector<float> positions = mesh.vertices;
     std::vector<uint8_t> removed(mesh.num_vertices(), 0);
-    const LatticePoints lattice = nearest_lattice_points(positions, cube_edge, snap_distance, threads);
+    const LatticePoints lattice = nearest_lattice_points(positions, cube_edge, snap_distance, threads, pinned);
     const MeshAdjacency adj = working_adjacency(triangles, positions, threads);
     const std::vector<int32_t> active = active_vertices(adj, lattice, threads);
 

@@ -48,7 +48,7 @@ void laplacian_smooth(TriMesh& mesh, const std::vector<float>& weights, int iter
 }
 
 void laplacian_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& weights, int iterations, double beta,
-                      int threads) {
+                      int threads, const WallConstraints* walls) {
     validate_mesh_arrays(mesh, "laplacian_smooth");
     const std::size_t nv = mesh.num_vertices();
     if (iterations < 0) throw InputError("laplacian_smooth: iterations must be >= 0, got " + std::to_string(iterations));
@@ -83,6 +83,7 @@ void laplacian_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, const std::
     for (int it = 0; it < iterations; ++it) {
         umbrella_step(neighbours, mesh.vertices.data(), other.data(), w, beta, threads);
         mesh.vertices.swap(other);
+        if (walls) walls->apply(mesh.vertices.data(), nv);
     }
 }
 

@@ -5,13 +5,15 @@
 
 #include "mesh/adjacency.h"
 #include "mesh/mesh.h"
+#include "post/wall_constraints.h"
 
 namespace meniscus {
 
 // `iterations` Jacobi steps on mesh.vertices. weights: one per vertex in [0, 1] (clamped; NaN refused); empty means
-// 1 everywhere (plain uniform smoothing). The same bits for any thread count.
+// 1 everywhere (plain uniform smoothing). The same bits for any thread count. With walls, vertices on a container's
+// wall are put back on it after every step: they slide along it.
 void laplacian_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& weights, int iterations, double beta,
-                      int threads);
+                      int threads, const WallConstraints* walls = nullptr);
 // The same, building the adjacency.
 void laplacian_smooth(TriMesh& mesh, const std::vector<float>& weights, int iterations, double beta, int threads);
 

@@ -50,7 +50,8 @@ UnsmoothedSurface record_unsmoothed_surface(const TriMesh& mesh, int threads) {
 }
 
 SmoothedNormals restore_component_volumes(TriMesh& mesh, const MeshAdjacency& adjacency, const UnsmoothedSurface& unsmoothed,
-                                          const std::vector<float>& amount, double max_offset, int normal_iterations, int threads) {
+                                          const std::vector<float>& amount, double max_offset, int normal_iterations, int threads,
+                                          const WallConstraints* walls) {
     // Smoothed normals: offsets along raw vertex normals would print the triangulation's noise back in. The offsets
     // are small against the features, so the directions computed once serve both Newton steps. Computed before
     // anything else, since the normals stage takes them even when there is nothing to restore.
@@ -84,6 +85,7 @@ SmoothedNormals restore_component_volumes(TriMesh& mesh, const MeshAdjacency& ad
         }
         if (!any) break;
         move_along_normals(mesh, unsmoothed.labels, offset, amount, normals.values, threads);
+        if (walls) walls->apply(mesh.vertices.data(), mesh.num_vertices());
     }
     return normals;
 }

@@ -13,6 +13,7 @@
 #include "mesh/mesh.h"
 #include "parameters.h"
 #include "post/normals.h"
+#include "post/wall_constraints.h"
 
 namespace meniscus {
 
@@ -28,9 +29,11 @@ UnsmoothedSurface record_unsmoothed_surface(const TriMesh& mesh, int threads);
 // Moves vertices along their smoothed area-weighted normals (normal_iterations of Eq. 12, computed once on the
 // smoothed surface) by s_c * amount_i so that component c's volume returns to its unsmoothed volume; amount empty
 // means 1 everywhere. |s_c| is capped at max_offset. Two Newton steps at most. Returns the normals it moved along:
-// the offsets are tiny against the edge lengths, so they are the restored surface's normals too.
+// the offsets are tiny against the edge lengths, so they are the restored surface's normals too. With walls,
+// vertices on a container's wall move along it only.
 SmoothedNormals restore_component_volumes(TriMesh& mesh, const MeshAdjacency& adjacency, const UnsmoothedSurface& unsmoothed,
-                                          const std::vector<float>& amount, double max_offset, int normal_iterations, int threads);
+                                          const std::vector<float>& amount, double max_offset, int normal_iterations, int threads,
+                                          const WallConstraints* walls = nullptr);
 
 // The smoothing iterations of the normals restoration moves along: the output's own when it asks for smoothed
 // area-weighted normals (so that the normals stage can take them as they are), otherwise 10.

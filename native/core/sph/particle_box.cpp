@@ -9,12 +9,8 @@ std::size_t keep_particles_in_box(ParticleData& particles, const Vector3& min, c
     std::vector<std::size_t> kept;
     kept.reserve(n);
     for (std::size_t i = 0; i < n; ++i) {
-        bool inside = true;
-        for (int k = 0; k < 3; ++k) {
-            const double x = particles.positions[3 * i + k];
-            inside = inside && x >= min[k] && x <= max[k];  // NaN is outside
-        }
-        if (inside) kept.push_back(i);
+        const double point[3] = {particles.positions[3 * i], particles.positions[3 * i + 1], particles.positions[3 * i + 2]};
+        if (inside_box(point, min, max)) kept.push_back(i);
     }
     if (kept.size() == n) return 0;
     auto gather = [&kept](std::vector<float>& values, std::size_t components) {

@@ -32,12 +32,17 @@ uint32_t edge_key(int x, int y, int z, int axis) { return ((uint32_t(z) * kBrick
 
 class BrickMesher {
 public:
-    BrickMesher(double cube_edge, double threshold) : cube_(cube_edge), threshold_(static_cast<float>(threshold)) {}
+    BrickMesher(double cube_edge, double threshold, const MeshBox* box)
+        : cube_(cube_edge), threshold_(static_cast<float>(threshold)), box_(box) {}
 
     BrickMesh run(const LatticeCoords& brick, BrickScratch& scratch, const BrickSampler& sample) const {
         BrickMesh out;
         const LatticeCoords base{brick[0] * kBrick, brick[1] * kBrick, brick[2] * kBrick};
-        if (!sample(base, scratch)) return out;
+        const BoxCover cover = box_cover(base);
+        if (cover == kBoxOutside) return out;
+        const bool crossing = sample(base, scratch);
+        // A brick the wall cuts needs meshing even when wholly inside the fluid: the wall makes the surface there.
+        if (cover == kBoxPartial ? !close_at_walls(base, scratch) : !crossing) return out;
         create_vertices(base, scratch, out);
         create_triangles(brick, scratch, out);
         return out;
@@ -46,10 +51,62 @@ public:
 private:
     // Eq. 2: linear interpolation of the threshold crossing along the edge from grid point (x, y, z) along axis.
     void edge_vertex_position(const LatticeCoords& base, int x, int y, int z, int axis, float a, float b, float* position) const {
-        double fraction = (double(threshold_) - double(a)) / (double(b) - double(a));
-        fraction = std::min(std::max(fraction, kEdgeMargin), 1.0 - kEdgeMargin);
+        const double raw = (double(threshold_) - double(a)) / (double(b) - double(a));
+        const double fraction = std::min(std::max(raw, kEdgeMargin), 1.0 - kEdgeMargin);
         const int64_t g[3] = {base[0] + x, base[1] + y, base[2] + z};
         for (int k = 0; k < 3; ++k) position[k] = static_cast<float>((double(g[k]) + (k == axis ? fraction : 0.0)) * cube_);
+        if (box_) place_on_wall(g, axis, raw, b, position);
+    }
+
+    // With a box: whether lattice coordinate g along axis k lies inside it (kEdgeMargin cubes within the walls).
+    bool in_box(int64_t g, int k) const {
+        const double p = double(g) * cube_, margin = kEdgeMargin * cube_;
+        return p >= box_->lower[k] + margin && p <= box_->upper[k] - margin;
+    }
+    bool point_in_box(const int64_t* g) const { return in_box(g[0], 0) && in_box(g[1], 1) && in_box(g[2], 2); }
+
+    // An edge that leaves the box: its vertex goes onto the wall unless the level set crosses the threshold before
+    // the wall (seen from the end inside). An outside end whose value close_at_walls set to the threshold is
+    // outside only because of the wall, so the wall is the crossing.
+    void place_on_wall(const int64_t* g, int axis, double raw_fraction, float b, float* position) const {
+        int64_t h[3] = {g[0], g[1], g[2]};
+        h[axis] += 1;
+        const bool a_in = point_in_box(g), b_in = point_in_box(h);
+        if (a_in == b_in) return;
+        const double wall = a_in ? box_->upper[axis] : box_->lower[axis];
+        const double wall_fraction = wall / cube_ - double(g[axis]);
+        const bool outside_end_at_threshold = a_in ? b >= threshold_ : raw_fraction <= 0.0;
+        const bool wall_first = outside_end_at_threshold || (a_in ? wall_fraction <= raw_fraction : wall_fraction >= raw_fraction);
+        if (wall_first) position[axis] = static_cast<float>(wall);
+    }
+
+    enum BoxCover { kBoxInside, kBoxPartial, kBoxOutside };
+    BoxCover box_cover(const LatticeCoords& base) const {
+        if (!box_) return kBoxInside;
+        bool all_in = true;
+        for (int k = 0; k < 3; ++k) {
+            const bool lo_in = in_box(base[k], k), hi_in = in_box(base[k] + kBrick, k);
+            const double lo = double(base[k]) * cube_, hi = double(base[k] + kBrick) * cube_;
+            if (hi < box_->lower[k] || lo > box_->upper[k]) return kBoxOutside;
+            all_in = all_in && lo_in && hi_in;
+        }
+        return all_in ? kBoxInside : kBoxPartial;
+    }
+
+    // Points outside the box become outside the fluid: a value above the threshold is lowered to the threshold
+    // itself (which counts as outside), so place_on_wall can tell such a point from one the fluid does not reach.
+    // Returns whether the brick still has both sides.
+    bool close_at_walls(const LatticeCoords& base, BrickScratch& s) const {
+        std::array<std::array<uint8_t, kBrickPoints>, 3> inside{};
+        for (int k = 0; k < 3; ++k)
+            for (int i = 0; i < kBrickPoints; ++i) inside[k][i] = in_box(base[k] + i, k);
+        for (int z = 0; z < kBrickPoints; ++z)
+            for (int y = 0; y < kBrickPoints; ++y)
+                for (int x = 0; x < kBrickPoints; ++x) {
+                    float& v = s.values[point_index(x, y, z)];
+                    if (!(inside[0][x] && inside[1][y] && inside[2][z]) && v > threshold_) v = threshold_;
+                }
+        return crosses_threshold(s.values, threshold_);
     }
 
     // Rows of points along x, classified once: most rows lie wholly inside or outside, and a row of cubes (or of
@@ -181,6 +238,7 @@ private:
 
     double cube_;
     float threshold_;
+    const MeshBox* box_;
 };
 
 }  // namespace
@@ -197,10 +255,11 @@ bool crosses_threshold(const std::vector<float>& values, float threshold) {
 
 // Meshes every brick independently, then stitches: global vertex numbers follow the brick order, and foreign
 // references are resolved through the owner brick's border list.
-TriMesh mesh_bricks(const std::vector<LatticeCoords>& bricks, const BrickSampler& sample, double cube, double threshold, int threads) {
+TriMesh mesh_bricks(const std::vector<LatticeCoords>& bricks, const BrickSampler& sample, double cube, double threshold, int threads,
+                    const MeshBox* box) {
     std::vector<BrickMesh> pieces(bricks.size());
     {
-        BrickMesher mesher(cube, threshold);
+        BrickMesher mesher(cube, threshold, box);
         ParallelErrors errors;
 #pragma omp parallel num_threads(threads)
         {

@@ -48,10 +48,19 @@ using BrickSampler = std::function<bool(const LatticeCoords& base, BrickScratch&
 // Whether `values` has points on both sides of the threshold (inside: value > threshold).
 bool crosses_threshold(const std::vector<float>& values, float threshold);
 
+// A container's walls closing the surface (post/container.h): lattice points outside the box count as outside the
+// fluid, so the surface is the fluid's intersection with the box, closed by flat faces on the walls. An edge leaving
+// the box gets its vertex on the wall's plane exactly (the coordinate is the plane's, not an interpolation), unless
+// the level set crosses the threshold first. Points within kEdgeMargin cubes inside a wall count as outside, so no
+// vertex lands on a lattice point.
+struct MeshBox {
+    std::array<double, 3> lower{}, upper{};
+};
+
 // The mesh of the given bricks (sorted by coords_less, unique): every edge with a sign change must start in one of
-// them, so that its vertex has an owner that creates it.
+// them, so that its vertex has an owner that creates it. With a box, the surface is closed against its walls.
 TriMesh mesh_bricks(const std::vector<LatticeCoords>& bricks, const BrickSampler& sample, double cube_edge, double threshold,
-                    int threads);
+                    int threads, const MeshBox* box = nullptr);
 
 // Marching cubes alone, on a field given as a function (for tests and analytic surfaces): the same table, bricks
 // and stitching as the reconstruction, over the lattice of cube_edge covering [lower, upper]. The field must be

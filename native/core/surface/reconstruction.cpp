@@ -1,5 +1,7 @@
 #include "surface/reconstruction.h"
 
+#include "sph/particle_box.h"
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -34,6 +36,31 @@ std::vector<uint8_t> finite_particles(const PositionsView& positions, const Exec
     return keep;
 }
 
+// Particles outside the container's particle box: dropped, with a count and a warning when none are left. Combines
+// with `keep` (the finite particles; empty: all). Returns the particles to keep (empty: all).
+std::vector<uint8_t> particles_in_box(const PositionsView& positions, std::vector<uint8_t> keep, const ContainerParams* container,
+                                      PipelineStats* stats) {
+    if (!container || !container->particle_aabb_min || !container->particle_aabb_max) return keep;
+    const Vector3& lower = *container->particle_aabb_min;
+    const Vector3& upper = *container->particle_aabb_max;
+    if (keep.empty()) keep.assign(positions.count, 1);
+    std::size_t outside = 0, kept = 0;
+    for (std::size_t i = 0; i < positions.count; ++i) {
+        if (!keep[i]) continue;
+        const double point[3] = {positions.coord(i, 0), positions.coord(i, 1), positions.coord(i, 2)};
+        const bool inside = inside_box(point, lower, upper);
+        keep[i] = inside;
+        inside ? ++kept : ++outside;
+    }
+    if (stats) {
+        stats->set_count("particles_outside_box", static_cast<double>(outside));
+        if (kept == 0 && outside > 0)
+            stats->warnings.push_back("all " + std::to_string(outside) +
+                                      " particles are outside the particle box (particle_aabb_min/max): the mesh is empty");
+    }
+    return keep;
+}
+
 // Rough upper estimate of the bytes the mesh of this frame needs, from the particle cells on the fluid's boundary
 // (cells with a missing face neighbour): each carries about one kernel support squared of surface, meshed with
 // about 4 triangles per cube face area; about 120 bytes per triangle cover the mesh, the bricks' pieces before
@@ -58,10 +85,10 @@ double estimate_mesh_bytes(const ParticleGrid& grid, double cube_edge, std::size
 }  // namespace
 
 SurfaceReconstruction reconstruct_surface(const PositionsView& positions, const ReconstructionParams& params,
-                                          const ExecutionOptions& execution, PipelineStats* stats) {
+                                          const ExecutionOptions& execution, PipelineStats* stats, const ContainerParams* container) {
     validate(params);
     const int threads = resolve_threads(execution.threads);
-    const std::vector<uint8_t> keep = finite_particles(positions, execution, stats);
+    const std::vector<uint8_t> keep = particles_in_box(positions, finite_particles(positions, execution, stats), container, stats);
     const double support = params.compact_support();
     const double cube = params.cube_edge();
 
@@ -81,7 +108,11 @@ SurfaceReconstruction reconstruct_surface(const PositionsView& positions, const 
 
     StageTimer mc_timer(stats, "level set and marching cubes");
     const std::vector<LatticeCoords> bricks = bricks_near_particles(r.grid, support, cube, threads);
-    r.mesh = mesh_bricks(bricks, colour_field_sampler(r.sph_field(), cube, params.iso_threshold), cube, params.iso_threshold, threads);
+    MeshBox walls;
+    const bool capped = container && container->mesh_aabb_min && container->mesh_aabb_max && container->mesh_aabb_cap;
+    if (capped) walls = {*container->mesh_aabb_min, *container->mesh_aabb_max};
+    r.mesh = mesh_bricks(bricks, colour_field_sampler(r.sph_field(), cube, params.iso_threshold), cube, params.iso_threshold, threads,
+                         capped ? &walls : nullptr);
     mc_timer.stop();
 
     if (stats) {

@@ -30,7 +30,10 @@ struct SurfaceReconstruction {
 // Validates the parameters (InputError naming the bad one), refuses NaN/Inf positions unless
 // execution.skip_invalid, and refuses meshes beyond the memory budget (ResourceError with the estimate). Adds the
 // stages' seconds ("neighborhood", "density", "level set and marching cubes") and counts to stats when given.
+// With a container: particles outside its particle box are left out (counted as "particles_outside_box"), and with a
+// capped mesh box the surface is closed against the box's walls (bricks.h, MeshBox).
 SurfaceReconstruction reconstruct_surface(const PositionsView& positions, const ReconstructionParams& params,
-                                          const ExecutionOptions& execution, PipelineStats* stats = nullptr);
+                                          const ExecutionOptions& execution, PipelineStats* stats = nullptr,
+                                          const ContainerParams* container = nullptr);
 
 }  // namespace meniscus
