@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <string>
 
 #if defined(__SSE2__) || defined(_M_X64)
 #include <immintrin.h>
@@ -38,49 +40,16 @@ inline void splat_row(float* row, const float* dx2, int n, float dyz, float inve
     for (; i < n; ++i) row[i] += factor * CubicSplineKernel::shape_branch_free(std::sqrt(dyz + dx2[i]) * inverse_support);
 }
 
-// The same row eight points at a time with AVX, chosen at run time (the build targets baseline x86-64). Rows are
-// about 16 points long, so this halves the vector operations of the sampler's inner loop, which is most of the
-// reconstruction's time. AVX has no fused multiply-add (and -ffp-contract=off forbids contracting anyway): each
-// lane does the operations of splat_row in the same order, with the same IEEE rounding, so the bits do not depend
-// on which path ran. GCC and Clang only (MinGW included, clang-cl not: it lacks the run-time CPU check); other
-// compilers keep splat_row.
-#if (defined(__GNUC__) || defined(__clang__)) && !defined(_MSC_VER) && (defined(__x86_64__) || defined(__i386__)) && defined(__SSE2__)
-#define MENISCUS_SPLAT_AVX 1
-inline __attribute__((target("avx"))) void splat_row_avx(float* row, const float* dx2, int n, float dyz, float inverse_support,
-                                                         float factor) {
-    int i = 0;
-    const __m256 dyz8 = _mm256_set1_ps(dyz), inverse8 = _mm256_set1_ps(inverse_support), factor8 = _mm256_set1_ps(factor);
-    const __m256 one = _mm256_set1_ps(1.0f), two = _mm256_set1_ps(2.0f), zero = _mm256_setzero_ps();
-    for (; i + 8 <= n; i += 8) {
-        const __m256 q = _mm256_mul_ps(_mm256_sqrt_ps(_mm256_add_ps(dyz8, _mm256_loadu_ps(dx2 + i))), inverse8);
-        const __m256 a = _mm256_max_ps(_mm256_sub_ps(one, q), zero);
-        const __m256 b = _mm256_max_ps(_mm256_sub_ps(one, _mm256_mul_ps(two, q)), zero);
-        const __m256 shape =
-            _mm256_sub_ps(_mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(two, a), a), a), _mm256_mul_ps(_mm256_mul_ps(b, b), b));
-        _mm256_storeu_ps(row + i, _mm256_add_ps(_mm256_loadu_ps(row + i), _mm256_mul_ps(factor8, shape)));
-    }
-    const __m128 dyz4 = _mm_set1_ps(dyz), inverse4 = _mm_set1_ps(inverse_support), factor4 = _mm_set1_ps(factor);
-    for (; i + 4 <= n; i += 4)
-        _mm_storeu_ps(row + i, _mm_add_ps(_mm_loadu_ps(row + i), splat_shape4(_mm_add_ps(dyz4, _mm_loadu_ps(dx2 + i)), inverse4, factor4)));
-    for (; i < n; ++i) row[i] += factor * CubicSplineKernel::shape_branch_free(std::sqrt(dyz + dx2[i]) * inverse_support);
-}
-
-// One particle's rows of the brick, the loop of ColourFieldSampler spelled out inside the AVX target: a function of
-// another target is not inlined into the sampler, and a call per row of two or three vector operations costs
-// about as much as the row. Same rows, same order, same operations.
-__attribute__((target("avx"))) void splat_particle_avx(float* values, const float* dx2, const float* dy2, const float* dz2, int nx, int ny,
-                                                       int nz, int ox, int oy, int oz, float support_squared, float inverse_support,
-                                                       float factor) {
-    for (int iz = 0; iz < nz; ++iz)
-        for (int iy = 0; iy < ny; ++iy) {
-            const float dyz = dz2[iz] + dy2[iy];
-            if (dyz >= support_squared) continue;
-            splat_row_avx(values + point_index(ox, oy + iy, oz + iz), dx2, nx, dyz, inverse_support, factor);
-        }
-}
-
-// Sixteen points at a time with AVX-512, where the CPU has it: a row (about 16 points) is then one operation, its
-// end masked, instead of two with AVX. The zero-masking forms stand in for the plain sqrt and max, which GCC 12's
+// A row sixteen points at a time with AVX-512, chosen at run time (the build targets baseline x86-64): rows are
+// about 16 points long, so a row is one vector operation (its end masked) instead of four with SSE, and this loop is
+// most of the reconstruction's time (1 M particles, c = 0.5: the stage takes 1.41 s instead of 2.47 s). An AVX
+// (8-wide) path was measured too and was no faster than SSE here (2.66 s), so there is none. No fused multiply-add
+// (-ffp-contract=off): each lane does the operations of splat_row in the same order with the same rounding, so
+// the bits do not depend on the path (tests/python/test_mesh_pins.py runs both).
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(_MSC_VER) && !defined(_WIN32) && \
+    (defined(__x86_64__) || defined(__i386__)) && defined(__SSE2__)
+#define MENISCUS_SPLAT_AVX512 1
+// The zero-masking forms stand in for the plain sqrt and max, which GCC 12's
 // headers spell with an "undefined" operand that -Wmaybe-uninitialized flags; on the active lanes they compute the
 // same thing, and the inactive ones are never stored.
 inline __attribute__((target("avx512f"))) void splat_row_avx512(float* row, const float* dx2, int n, float dyz, float inverse_support,
@@ -99,7 +68,8 @@ inline __attribute__((target("avx512f"))) void splat_row_avx512(float* row, cons
     }
 }
 
-// The same for AVX-512, where a row is a single vector operation.
+// One particle's rows of the brick, the loop of ColourFieldSampler spelled out inside the AVX-512 target: a function
+// of another target is not inlined into the sampler, and a call per row costs about as much as the row.
 __attribute__((target("avx512f"))) void splat_particle_avx512(float* values, const float* dx2, const float* dy2, const float* dz2, int nx,
                                                               int ny, int nz, int ox, int oy, int oz, float support_squared,
                                                               float inverse_support, float factor) {
@@ -111,14 +81,15 @@ __attribute__((target("avx512f"))) void splat_particle_avx512(float* values, con
         }
 }
 
-bool cpu_has_avx512() {
-    static const bool avx512 = __builtin_cpu_supports("avx512f") != 0;  // as for AVX, with the OS's support
+// MENISCUS_SIMD=sse keeps the SSE path (the test that both paths give the same bits; also a way out should a CPU
+// misreport its features).
+bool use_avx512() {
+    static const bool avx512 = [] {
+        const char* cap = std::getenv("MENISCUS_SIMD");
+        if (cap != nullptr && std::string(cap) == "sse") return false;
+        return __builtin_cpu_supports("avx512f") != 0;  // also checks that the OS saves the AVX-512 registers
+    }();
     return avx512;
-}
-
-bool cpu_has_avx() {
-    static const bool avx = __builtin_cpu_supports("avx") != 0;  // also checks that the OS saves the AVX registers
-    return avx;
 }
 #endif
 
@@ -143,8 +114,8 @@ public:
             hi[k] = static_cast<int64_t>(std::floor((double(base[k] + kBrick) * cube_ + support) / cell)) + 1;
         }
         const float inverse_support = 1.0f / kernel.support();
-#ifdef MENISCUS_SPLAT_AVX
-        const bool avx = cpu_has_avx(), avx512 = cpu_has_avx512();
+#ifdef MENISCUS_SPLAT_AVX512
+        const bool avx512 = use_avx512();
 #endif
         grid.for_each_cell_in_box(lo, hi, [&](std::size_t c) {
             for (std::size_t j = grid.cell_begin(c); j < grid.cell_end(c); ++j) {
@@ -170,15 +141,10 @@ public:
                 const float factor = field_.volumes[j] * kernel.value(0.0f);  // V_j * 8/(pi H^3)
                 const int nx = static_cast<int>(s.dx2.size()), ny = static_cast<int>(s.dy2.size()), nz = static_cast<int>(s.dz2.size());
                 const int ox = static_cast<int>(first[0] - base[0]), oy = static_cast<int>(first[1] - base[1]), oz = static_cast<int>(first[2] - base[2]);
-#ifdef MENISCUS_SPLAT_AVX
+#ifdef MENISCUS_SPLAT_AVX512
                 if (avx512) {
                     splat_particle_avx512(s.values.data(), s.dx2.data(), s.dy2.data(), s.dz2.data(), nx, ny, nz, ox, oy, oz,
                                           support_squared, inverse_support, factor);
-                    continue;
-                }
-                if (avx) {
-                    splat_particle_avx(s.values.data(), s.dx2.data(), s.dy2.data(), s.dz2.data(), nx, ny, nz, ox, oy, oz, support_squared,
-                                       inverse_support, factor);
                     continue;
                 }
 #endif
