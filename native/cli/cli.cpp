@@ -162,6 +162,11 @@ struct ReconstructArgs {
     bool threads_per_frame = true;    // --mt-particles
     bool double_precision = false;    // -d: accepted from splashsurf command lines, no effect (see add_compatibility_flags)
     bool raw_normals = false;         // --output-raw-normals: refused when on (not written)
+    // splashsurf's flags that have no effect here (add_compatibility_flags): parsed into these, then unused.
+    struct Ignored {
+        bool subdomain_grid = true, keep_verts = false, check_debug = false;
+        double rest_density = 1000.0, subdomain_cubes = 64;
+    } ignored;
 };
 
 // splashsurf spells a switch --normals=on; accepted the same here, and a bare --normals means on.
@@ -341,14 +346,12 @@ void add_compatibility_flags(CLI::App& command, ReconstructArgs& args) {
     add_switch(command, "-d,--double-precision", args.double_precision,
                "No effect: double precision moves splashsurf's own vertices by at most 0.4 % of a cube and gives the same "
                "triangles")->group(group);
-    static bool subdomain_grid = true;
-    add_switch(command, "--subdomain-grid", subdomain_grid, "No effect: Meniscus always works on a sparse grid of bricks")->group(group);
-    static double rest_density = 1000.0, subdomain_cubes = 64;
-    command.add_option("--rest-density", rest_density, "No effect: the rest density cancels out of the colour field")->group(group);
-    command.add_option("--subdomain-cubes", subdomain_cubes, "No effect: Meniscus's bricks are 32 cubes wide")->group(group);
-    static bool keep_verts = false, check_debug = false;
-    add_switch(command, "--keep-verts", keep_verts, "No effect: decimation never leaves vertices without faces")->group(group);
-    add_switch(command, "--check-mesh-debug", check_debug, "No effect: the details of a failed check are in the --stats JSON")
+    ReconstructArgs::Ignored& ignored = args.ignored;
+    add_switch(command, "--subdomain-grid", ignored.subdomain_grid, "No effect: Meniscus always works on a sparse grid of bricks")->group(group);
+    command.add_option("--rest-density", ignored.rest_density, "No effect: the rest density cancels out of the colour field")->group(group);
+    command.add_option("--subdomain-cubes", ignored.subdomain_cubes, "No effect: Meniscus's bricks are 32 cubes wide")->group(group);
+    add_switch(command, "--keep-verts", ignored.keep_verts, "No effect: decimation never leaves vertices without faces")->group(group);
+    add_switch(command, "--check-mesh-debug", ignored.check_debug, "No effect: the details of a failed check are in the --stats JSON")
         ->group(group);
     add_switch(command, "--output-raw-normals", args.raw_normals,
                "Not supported: only the smoothed normals are written (refused when on)")->group(group);
@@ -562,6 +565,7 @@ int inspect_command(const std::string& mesh_path, const std::string& raw_path, c
 struct ConvertArgs {
     std::string particles, mesh, output;
     bool overwrite = false;
+    bool quiet = false;  // accepted for splashsurf's command lines; convert prints one line either way
     std::vector<double> domain_min, domain_max;
 };
 
@@ -656,8 +660,7 @@ int run_cli(const std::vector<std::string>& arguments, const CliHooks& hooks) {
     convert->add_flag("--overwrite", convert_args.overwrite, "Replace an existing output file");
     convert->add_option("--domain-min", convert_args.domain_min, "Lower corner of the box of particles to keep")->expected(3)->type_name("X Y Z");
     convert->add_option("--domain-max", convert_args.domain_max, "Upper corner of the box of particles to keep")->expected(3)->type_name("X Y Z");
-    static bool convert_quiet = false;
-    convert->add_flag("-q,--quiet", convert_quiet, "Accepted for splashsurf's command lines");
+    convert->add_flag("-q,--quiet", convert_args.quiet, "Accepted for splashsurf's command lines");
 
     // splashsurf's command lines write short options as -r=0.025; CLI11 reads that as the value "=0.025".
     std::vector<std::string> split;
