@@ -404,12 +404,11 @@ void write_ply_mesh(const TriMesh& mesh, const std::string& path) {
     out.close();
 }
 
-// Particles: the vertex element of a mesh without faces, with every attribute (checked as a mesh's would be).
+// Particles: the vertex element of a mesh without faces, with every attribute (write_particles checked the sizes).
 void write_ply_particles(const ParticleData& particles, const std::string& path) {
     TriMesh points;
     points.vertices = particles.positions;
     points.attributes = particles.attributes;
-    validate_mesh(points, path);
     write_ply_mesh(points, path);
 }
 
