@@ -89,12 +89,7 @@ def meniscus_load_post(*_args):
     update.forget_cached_state()
     _migrate_all_settings()
     _append_once(bpy.app.handlers.frame_change_post, meniscus_frame_change_post)
-    try:
-        scene = bpy.context.scene
-        if scene is not None:
-            update.update_scene(scene)
-    except Exception:
-        traceback.print_exc()
+    _update_current_scene()
 
 
 @persistent
@@ -102,6 +97,11 @@ def meniscus_undo_redo_post(*_args):
     # Undo restores parameters, the frame and the meshes as the undo step saved them, which normally agree; the
     # usual check of file and parameters against what each mesh shows (a rebuild only on a mismatch, e.g. a mesh
     # that undo moved in memory) guards the cases where they do not.
+    _update_current_scene()
+
+
+def _update_current_scene():
+    # A handler must not raise into Blender: a failure is printed, the surfaces keep what they show.
     try:
         scene = bpy.context.scene
         if scene is not None:

@@ -154,13 +154,8 @@ def _file_source(obj, settings, mesh, scene_time, for_render):
         if lookup.path is None:
             return _empty_for(mesh, lookup, scene_time, "file")
         result = cache.reconstruct_file(lookup.path, arguments, wanted)
-        blender_seconds, attribute_note = _write(mesh, settings, result.mesh)
-        return _status_lines(
-            os.path.basename(lookup.path) + (" (render)" if for_render else ""),
-            f"{result.particle_count:,} particles",
-            _face_counts(result.mesh),
-            f"{result.seconds:.2f} s + {blender_seconds:.2f} s in Blender",
-            _missing_note(result), attribute_note)
+        return _show_reconstruction(mesh, settings, os.path.basename(lookup.path) + (" (render)" if for_render else ""),
+                                    result)
 
     return key, work
 
@@ -200,15 +195,17 @@ def _object_source(obj, settings, mesh, depsgraph, for_render):
 
     def work():
         result = cache.reconstruct_positions(positions, attributes, arguments, wanted)
-        blender_seconds, attribute_note = _write(mesh, settings, result.mesh)
-        return _status_lines(
-            f"{source.name}: {kind}" + (" (render)" if for_render else ""),
-            f"{result.particle_count:,} particles",
-            _face_counts(result.mesh),
-            f"{result.seconds:.2f} s + {blender_seconds:.2f} s in Blender",
-            _missing_note(result), attribute_note)
+        return _show_reconstruction(mesh, settings, f"{source.name}: {kind}" + (" (render)" if for_render else ""), result)
 
     return key, work
+
+
+def _show_reconstruction(mesh, settings, label, result):
+    """Writes a reconstruction (from files or from an object) into the mesh; returns the status lines."""
+    blender_seconds, attribute_note = _write(mesh, settings, result.mesh)
+    return _status_lines(label, f"{result.particle_count:,} particles", _face_counts(result.mesh),
+                         f"{result.seconds:.2f} s + {blender_seconds:.2f} s in Blender", _missing_note(result),
+                         attribute_note)
 
 
 def _lookup(frames, pattern, scene_time, settings):
