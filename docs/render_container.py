@@ -6,7 +6,6 @@ the floor.
     blender -b --factory-startup --python-exit-code 1 --python docs/render_container.py -- --addon-path build/addon
 """
 import argparse
-import math
 import pathlib
 import sys
 
@@ -20,27 +19,17 @@ parser.add_argument("--frame", default="../shared/data/sequence/double_dam_break
 parser.add_argument("--output", default="docs/images/container.png")
 parser.add_argument("--samples", type=int, default=32)
 args = parser.parse_args(argv)
-sys.path.insert(0, str(pathlib.Path(args.addon_path).resolve()))
-import meniscus  # noqa: E402
-from meniscus.blender import mesh_update  # noqa: E402
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import render_scene  # noqa: E402
+
+meniscus, mesh_update = render_scene.library(args.addon_path)
 
 TANK = ((0.0, 0.0, 0.0), (3.0, 1.2, 2.0))
 particles = meniscus.read_particles(args.frame)
 free = meniscus.reconstruct(particles.positions, 0.025, cube_size=0.5)
 tank = meniscus.reconstruct(particles.positions, 0.025, cube_size=0.5, mesh_aabb_min=TANK[0], mesh_aabb_max=TANK[1])
 
-for obj in list(bpy.data.objects):
-    bpy.data.objects.remove(obj, do_unlink=True)
-scene = bpy.context.scene
-scene.render.engine = "CYCLES"
-scene.cycles.samples = args.samples
-scene.cycles.use_denoising = False
-scene.render.resolution_x, scene.render.resolution_y = 1200, 500
-world = bpy.data.worlds.new("container") if scene.world is None else scene.world
-scene.world = world
-world.use_nodes = True
-world.node_tree.nodes["Background"].inputs[0].default_value = (0.8, 0.85, 0.9, 1.0)
-world.node_tree.nodes["Background"].inputs[1].default_value = 0.6
+scene = render_scene.cycles_scene(args.samples, 1200, 500)
 
 water = bpy.data.materials.new("water")
 water.use_nodes = True
@@ -56,19 +45,8 @@ for name, mesh, shift in (("no container", free, 0.0), ("tank as container", tan
     scene.collection.objects.link(obj)
 
 # Outside the left wall, a little below the floor's level, looking at both surfaces' x = 0 ends side by side.
-centre = np.array([0.0, 1.35, 0.25])
-camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
-scene.collection.objects.link(camera)
-camera.location = (-3.2, 1.35, -0.35)
-direction = centre - np.array(camera.location)
-camera.rotation_euler = (math.atan2(math.hypot(direction[0], direction[1]), -direction[2]), 0.0,
-                         math.atan2(direction[1], direction[0]) - math.pi / 2)
-camera.data.lens = 30
-scene.camera = camera
-sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
-sun.data.energy = 4.0
-sun.rotation_euler = (math.radians(70), math.radians(0), math.radians(-60))
-scene.collection.objects.link(sun)
+render_scene.add_camera(scene, (-3.2, 1.35, -0.35), (0.0, 1.35, 0.25), 30)
+render_scene.add_sun(scene, (70, 0, -60))
 scene.render.filepath = str(pathlib.Path(args.output).resolve())
 bpy.ops.render.render(write_still=True)
 print("rendered", scene.render.filepath)

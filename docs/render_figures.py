@@ -4,7 +4,6 @@ smoothed (full pipeline), and the feature weights as colours (blue 0 -> red 1).
     blender -b --factory-startup --python-exit-code 1 --python docs/render_figures.py -- --addon-path build/addon
 """
 import argparse
-import math
 import pathlib
 import sys
 
@@ -18,9 +17,10 @@ parser.add_argument("--frame", default="../shared/data/splashsurf/double_dam_bre
 parser.add_argument("--output", default="docs/images")
 parser.add_argument("--samples", type=int, default=48)
 args = parser.parse_args(argv)
-sys.path.insert(0, str(pathlib.Path(args.addon_path).resolve()))
-import meniscus  # noqa: E402
-from meniscus.blender import mesh_update  # noqa: E402
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import render_scene  # noqa: E402
+
+meniscus, mesh_update = render_scene.library(args.addon_path)
 
 out = pathlib.Path(args.output)
 out.mkdir(parents=True, exist_ok=True)
@@ -31,19 +31,7 @@ raw = smoothed.raw
 RAW = dict(decimate_barnacles=False, smoothing_iterations=0, normal_smoothing_iterations=0)  # marching cubes alone
 raw_normals = meniscus.reconstruct(particles.positions, 0.025, cube_size=0.5, **RAW).normals
 
-for obj in list(bpy.data.objects):
-    bpy.data.objects.remove(obj, do_unlink=True)
-scene = bpy.context.scene
-scene.render.engine = "CYCLES"
-scene.cycles.samples = args.samples
-scene.cycles.use_denoising = False
-scene.render.resolution_x, scene.render.resolution_y = 960, 540
-scene.render.film_transparent = False
-world = bpy.data.worlds.new("figures") if scene.world is None else scene.world
-scene.world = world
-world.use_nodes = True
-world.node_tree.nodes["Background"].inputs[0].default_value = (0.8, 0.85, 0.9, 1.0)
-world.node_tree.nodes["Background"].inputs[1].default_value = 0.6
+scene = render_scene.cycles_scene(args.samples, 960, 540)
 
 
 
@@ -56,18 +44,8 @@ points = z_up(particles.positions)
 lo, hi = points.min(0), points.max(0)
 centre = (lo + hi) / 2
 size = float(np.linalg.norm(hi - lo))
-camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
-scene.collection.objects.link(camera)
-camera.location = (centre[0] + 0.45 * size, centre[1] - 0.85 * size, centre[2] + 0.55 * size)
-direction = centre - np.array(camera.location)
-camera.rotation_euler = (math.atan2(math.hypot(direction[0], direction[1]), -direction[2]), 0.0,
-                         math.atan2(direction[1], direction[0]) - math.pi / 2)
-camera.data.lens = 35
-scene.camera = camera
-sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
-sun.data.energy = 4.0
-sun.rotation_euler = (math.radians(40), math.radians(10), math.radians(30))
-scene.collection.objects.link(sun)
+render_scene.add_camera(scene, (centre[0] + 0.45 * size, centre[1] - 0.85 * size, centre[2] + 0.55 * size), centre, 35)
+render_scene.add_sun(scene, (40, 10, 30))
 
 
 def material(name, colour, by_weights=False):
