@@ -11,6 +11,7 @@
 #include "mesh/adjacency.h"
 #include "mesh/components.h"
 #include "post/normals.h"
+#include "post/surface_aggregates.h"
 #include "post/volume.h"
 #include "post/wall_constraints.h"
 
@@ -312,6 +313,68 @@ bool grid_average(const std::vector<float>& positions, const std::vector<float>&
     return true;
 }
 
+// The low-pass of the returned displacement on the surface's aggregates (post/surface_aggregates.h) instead of the
+// mesh: the field is smooth at the return's reach (9 r), many cells wide, so the aggregates carry it whole, and the
+// ~(9 r / e)^2 equivalent iterations run on a graph (cell / e)^2 times smaller. Restricted as area-weighted means,
+// filtered with the same heat kernel (its N from the aggregates' own coupled distance), prolonged as a distance-
+// weighted mean over the vertex's aggregate and the ones coupled to it (no steps at aggregate borders), then blended
+// by a fine low-pass of half a cell. Measured against the mesh's own low-pass (c = 0.25 and 0.5): hfL, volume and
+// droplets the same to the third digit, with a third of the applications.
+int aggregate_low_pass(std::vector<float>& value, const TriMesh& mesh, const MeshAdjacency& adjacency, const SurfaceAggregates& aggregates,
+                       const std::vector<float>& areas, double cell, double reach, double tolerance, double edge, int threads,
+                       HeatSmoothingReport& report) {
+    const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
+    // The mesh's umbrella low-pass keeps sum(valence x): so does this one, which then returns what the mesh's would.
+    std::vector<float> valence(static_cast<std::size_t>(nv));
+    for (int64_t i = 0; i < nv; ++i) valence[i] = static_cast<float>(adjacency.vertex_neighbours.size(i));
+    std::vector<double> coarse = restrict_to_aggregates(aggregates, valence, value.data(), 1, threads);
+    std::vector<double> mass(aggregates.size(), 0.0);
+    for (std::size_t a = 0; a < aggregates.size(); ++a)
+        for (int64_t k = aggregates.members.begin(a); k < aggregates.members.end(a); ++k) mass[a] += valence[aggregates.members.items[k]];
+    const std::vector<double> centre = restrict_to_aggregates(aggregates, areas, mesh.vertices.data(), 3, threads);
+    const double coarse_edge = rms_coupled_distance(aggregates, centre, threads);
+    report.coarse_edge = coarse_edge;
+    if (coarse_edge > 0.0) {
+        // The coupling-weighted mean keeps sum(coupling x) (a random walk's stationary weights), not sum(mass x): a
+        // small corner piece has much border for its size and would draw the returned displacement to itself
+        // (hilbert2 at c = 0.5 kept 0.977 of its volume before the final correction, the mesh's low-pass 1.010).
+        // Filtered as a normalised convolution of the density mass / coupling instead, f(P)(rho x) / f(P)(rho),
+        // which is f(P^T) on the mass-weighted field.
+        const int64_t na = static_cast<int64_t>(aggregates.size());
+        std::vector<double> pair(2 * static_cast<std::size_t>(na));
+        for (int64_t a = 0; a < na; ++a) {
+            double degree = 0.0;
+            for (int64_t k = aggregates.neighbours.begin(a); k < aggregates.neighbours.end(a); ++k) degree += aggregates.coupling[k];
+            const double rho = degree > 0.0 ? mass[a] / degree : 0.0;
+            pair[2 * a] = rho * coarse[a];
+            pair[2 * a + 1] = rho;
+        }
+        report.coarse_applications += aggregate_chebyshev(
+            pair, 2, aggregates, {}, heat_coefficients(std::pow(reach / coarse_edge, 2.0), tolerance), threads);
+        for (int64_t a = 0; a < na; ++a)
+            if (pair[2 * a + 1] > 0.0) coarse[a] = pair[2 * a] / pair[2 * a + 1];
+    }
+    // (1 - d^2 / (2 cell)^2)^2: smooth, zero two cells away, and the same bits with any maths library.
+    const double falloff = 1.0 / (4.0 * cell * cell);
+    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i) {
+            const int32_t own = aggregates.of_vertex[i];
+            double sum = 0.0, total = 0.0;
+            auto add = [&](int64_t a) {
+                double d2 = 0.0;
+                for (int k = 0; k < 3; ++k) d2 += (centre[3 * a + k] - mesh.vertices[3 * i + k]) * (centre[3 * a + k] - mesh.vertices[3 * i + k]);
+                const double fall = std::max(0.0, 1.0 - d2 * falloff), phi = fall * fall;
+                sum += phi * coarse[a];
+                total += phi;
+            };
+            add(own);
+            for (int64_t k = aggregates.neighbours.begin(own); k < aggregates.neighbours.end(own); ++k) add(aggregates.neighbours.items[k]);
+            value[i] = static_cast<float>(total > 0.0 ? sum / total : coarse[own]);
+        }
+    });
+    return heat_filter(value, 1, adjacency, {}, std::pow(0.5 * cell / edge, 2.0), tolerance, threads);
+}
+
 }  // namespace
 
 double smoothing_reach_at(double reach, double cube_size) {
@@ -430,6 +493,12 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     const double return_iterations = std::pow(local_scale / report.edge, 2.0);
     std::vector<float> before, offset, normals, areas;
     if (settings.local_return) offset.resize(static_cast<std::size_t>(nv));
+    // Aggregates for the return's low-pass when the mesh is fine (built once, from the first part's surface: the parts
+    // move vertices by a fraction of a cell).
+    const double aggregate_size = settings.aggregate_size >= 0.0 ? settings.aggregate_size : kAggregateCell;
+    const double cell = std::max(aggregate_size * radius, 2.0 * report.edge);
+    const bool coarse_return = aggregate_size > 0.0 && cell <= kAggregateCellLimit * aggregate_size * radius;
+    SurfaceAggregates aggregates;
     for (int part = 0; part < report.parts; ++part) {
         if (settings.local_return) before = mesh.vertices;
         report.applications += heat_filter(mesh.vertices, 3, adjacency, weights, report.iterations / report.parts, kPositionTolerance,
@@ -447,7 +516,15 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
                     offset[i] = d;
                 }
             });
-            if (!(settings.grid_return && grid_average(mesh.vertices, areas, weights, offset, local_scale, threads)))
+            if (coarse_return) {
+                if (part == 0) {
+                    aggregates = aggregate_surface(mesh, adjacency, areas, cell, threads);
+                    report.aggregates = aggregates.size();
+                }
+                report.applications += aggregate_low_pass(offset, mesh, adjacency, aggregates, areas, cell, local_scale,
+                                                          settings.return_tolerance > 0.0 ? settings.return_tolerance : kReturnTolerance,
+                                                          report.edge, threads, report);
+            } else if (!(settings.grid_return && grid_average(mesh.vertices, areas, weights, offset, local_scale, threads)))
                 report.applications += heat_filter(offset, 1, adjacency, {}, return_iterations,
                                                    settings.return_tolerance > 0.0 ? settings.return_tolerance : kReturnTolerance, threads);
         }

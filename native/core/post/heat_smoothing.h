@@ -50,6 +50,13 @@ constexpr double kPartTime = 2.5;
 // 12 r; the research measured 1 r returning every bump), larger returns a tube's shrinkage less locally (hilbert2's
 // volume before the final correction: 1.011 / 1.0105 / 1.011 at c = 0.5, the same at 6-12 r).
 constexpr double kLocalScale = 9.0;
+// Cell of the surface aggregates (post/surface_aggregates.h) the return's low-pass runs on, in r (at least two mesh
+// edges): coarse enough to cut the work threefold at c = 0.25-0.5, fine enough that a tube 3 particles across has a
+// ring of aggregates around it.
+constexpr double kAggregateCell = 1.0;
+// Largest cell, in kAggregateCell, the aggregates may grow to (two edges): up to c ~ 0.6. Coarser meshes low-pass on
+// themselves: their aggregates would be a few vertices around a tube, and the mesh's own low-pass is cheap there.
+constexpr double kAggregateCellLimit = 1.25;
 // Chebyshev tails dropped (fraction of a displacement): positions; the returned displacement.
 constexpr double kPositionTolerance = 1e-3;
 constexpr double kReturnTolerance = 1e-2;
@@ -88,6 +95,8 @@ struct HeatSmoothingSettings {
                                     // work, same tube smoothness, but slope flicker 0.062 instead of 0.055: dropped
     double return_tolerance = 0.0;  // 0: kReturnTolerance (3e-3 / 1e-2 / 3e-2 measured: flicker 0.0597 / 0.0599 / 0.0606)
     double local_scale = 0.0;       // reach of the return's low-pass in r; 0: kLocalScale
+    double aggregate_size = -1.0;   // cell of the surface aggregates the return's low-pass runs on (in r, at least two
+                                    // edges); < 0: kAggregateCell; 0: on the mesh itself (three times the work)
     const WallConstraints* walls = nullptr;
 };
 
@@ -96,6 +105,9 @@ struct HeatSmoothingReport {
     double iterations = 0.0;          // equivalent explicit iterations N
     int parts = 0;
     int applications = 0;             // operator applications (position flow and returned displacement)
+    int coarse_applications = 0;      // applications on the aggregates (two-level)
+    std::size_t aggregates = 0;       // their number
+    double coarse_edge = 0.0;         // their RMS coupled distance
     SmoothedNormals normals;          // the final correction's smoothed normals (empty without it): output-ready
     std::size_t reverted_components = 0;  // collapsed components given their positions back (the whole stage only)
     // Seconds spent: components (labels, volumes), flow, local return (normals, low-pass, move), final correction.

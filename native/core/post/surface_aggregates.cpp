@@ -1,0 +1,214 @@
+#include "post/surface_aggregates.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "base/disjoint_sets.h"
+#include "base/errors.h"
+#include "base/parallel.h"
+
+namespace meniscus {
+
+namespace {
+
+constexpr int64_t kBlock = 4096;
+
+// The other aggregates the members of `a` have mesh edges to, one entry per crossing edge (sorted: equal ids run).
+void crossing_aggregates(const SurfaceAggregates& g, const CsrList& vertex_neighbours, int64_t a, std::vector<int32_t>& out) {
+    out.clear();
+    for (int64_t k = g.members.begin(a); k < g.members.end(a); ++k) {
+        const int32_t v = g.members.items[k];
+        for (int64_t e = vertex_neighbours.begin(v); e < vertex_neighbours.end(v); ++e) {
+            const int32_t other = g.of_vertex[vertex_neighbours.items[e]];
+            if (other != a) out.push_back(other);
+        }
+    }
+    std::sort(out.begin(), out.end());
+}
+
+template <class Visit>
+void for_each_run(const std::vector<int32_t>& sorted, Visit&& visit) {
+    for (std::size_t i = 0; i < sorted.size();) {
+        std::size_t j = i;
+        while (j < sorted.size() && sorted[j] == sorted[i]) ++j;
+        visit(sorted[i], static_cast<float>(j - i));
+        i = j;
+    }
+}
+
+}  // namespace
+
+SurfaceAggregates aggregate_surface(const TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& vertex_areas,
+                                    double cell, int threads) {
+    const CsrList& nb = adjacency.vertex_neighbours;
+    const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
+    require_row_per_vertex(nb, mesh.num_vertices(), "aggregate_surface");
+    if (vertex_areas.size() != mesh.num_vertices())
+        throw InputError("aggregate_surface: got " + std::to_string(vertex_areas.size()) + " areas for " + std::to_string(nv) + " vertices");
+    if (!(cell > 0.0) || !std::isfinite(cell)) throw InputError("aggregate_surface: the cell size must be a positive number");
+    SurfaceAggregates g;
+    if (nv == 0) return g;
+
+    double lo[3] = {INFINITY, INFINITY, INFINITY};
+    for (int64_t i = 0; i < nv; ++i)
+        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], double(mesh.vertices[3 * i + k]));
+    // Cell coordinates packed in one integer (21 bits each: a scene 2 million cells across).
+    std::vector<int64_t> key(static_cast<std::size_t>(nv));
+    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i) {
+            int64_t packed = 0;
+            for (int k = 0; k < 3; ++k) {
+                const double u = std::floor((double(mesh.vertices[3 * i + k]) - lo[k]) / cell);
+                packed = (packed << 21) | (static_cast<int64_t>(std::min(std::max(u, 0.0), 2097151.0)));
+            }
+            key[i] = packed;
+        }
+    });
+    DisjointSets pieces(static_cast<std::size_t>(nv));
+    for (int64_t i = 0; i < nv; ++i)
+        for (int64_t e = nb.begin(i); e < nb.end(i); ++e) {
+            const int32_t j = nb.items[e];
+            if (j > i && key[j] == key[i]) pieces.unite(static_cast<int32_t>(i), j);
+        }
+    // Numbered in the order of their smallest vertex (the root, met first).
+    g.of_vertex.resize(static_cast<std::size_t>(nv));
+    int32_t count = 0;
+    for (int64_t i = 0; i < nv; ++i) {
+        const int32_t root = pieces.find(static_cast<int32_t>(i));
+        g.of_vertex[i] = root == i ? count++ : g.of_vertex[root];
+    }
+    g.members.offsets.assign(static_cast<std::size_t>(count) + 1, 0);
+    for (int64_t i = 0; i < nv; ++i) ++g.members.offsets[g.of_vertex[i] + 1];
+    for (int32_t a = 0; a < count; ++a) g.members.offsets[a + 1] += g.members.offsets[a];
+    g.members.items.resize(static_cast<std::size_t>(nv));
+    {
+        std::vector<int64_t> fill(g.members.offsets.begin(), g.members.offsets.end() - 1);
+        for (int64_t i = 0; i < nv; ++i) g.members.items[fill[g.of_vertex[i]]++] = static_cast<int32_t>(i);
+    }
+
+    // The coarse graph, built per block of aggregates (each row from its own members only) and joined in block order.
+    constexpr int64_t kRowsPerBlock = 256;
+    const int64_t blocks = (count + kRowsPerBlock - 1) / kRowsPerBlock;
+    std::vector<std::vector<int32_t>> block_items(static_cast<std::size_t>(blocks));
+    std::vector<std::vector<float>> block_coupling(static_cast<std::size_t>(blocks));
+    g.neighbours.offsets.assign(static_cast<std::size_t>(count) + 1, 0);
+    g.area.assign(static_cast<std::size_t>(count), 0.0);
+    parallel_for(blocks, threads, [&](int64_t b) {
+        std::vector<int32_t> crossing;
+        for (int64_t a = b * kRowsPerBlock; a < std::min<int64_t>(count, (b + 1) * kRowsPerBlock); ++a) {
+            crossing_aggregates(g, nb, a, crossing);
+            int64_t distinct = 0;
+            for_each_run(crossing, [&](int32_t other, float edges) {
+                block_items[b].push_back(other);
+                block_coupling[b].push_back(edges);
+                ++distinct;
+            });
+            g.neighbours.offsets[a + 1] = distinct;
+            double area = 0.0;
+            for (int64_t k = g.members.begin(a); k < g.members.end(a); ++k) area += vertex_areas[g.members.items[k]];
+            g.area[a] = area;
+        }
+    });
+    for (int32_t a = 0; a < count; ++a) g.neighbours.offsets[a + 1] += g.neighbours.offsets[a];
+    g.neighbours.items.resize(static_cast<std::size_t>(g.neighbours.offsets.back()));
+    g.coupling.resize(g.neighbours.items.size());
+    parallel_for(blocks, threads, [&](int64_t b) {
+        const int64_t first = g.neighbours.offsets[b * kRowsPerBlock];
+        std::copy(block_items[b].begin(), block_items[b].end(), g.neighbours.items.begin() + first);
+        std::copy(block_coupling[b].begin(), block_coupling[b].end(), g.coupling.begin() + first);
+    });
+    return g;
+}
+
+std::vector<double> restrict_to_aggregates(const SurfaceAggregates& g, const std::vector<float>& vertex_areas, const float* values,
+                                           int dims, int threads) {
+    const int64_t count = static_cast<int64_t>(g.size());
+    std::vector<double> out(static_cast<std::size_t>(count) * dims, 0.0);
+    parallel_blocks(count, threads, 256, [&](int64_t begin, int64_t end) {
+        for (int64_t a = begin; a < end; ++a) {
+            double sum[3] = {0.0, 0.0, 0.0}, weight = 0.0;
+            for (int64_t k = g.members.begin(a); k < g.members.end(a); ++k) {
+                const int64_t v = g.members.items[k];
+                const double w = vertex_areas[v];
+                weight += w;
+                for (int d = 0; d < dims; ++d) sum[d] += w * values[dims * v + d];
+            }
+            if (!(weight > 0.0)) {  // degenerate pieces: the plain mean
+                weight = static_cast<double>(g.members.size(a));
+                for (int d = 0; d < dims; ++d) sum[d] = 0.0;
+                for (int64_t k = g.members.begin(a); k < g.members.end(a); ++k)
+                    for (int d = 0; d < dims; ++d) sum[d] += values[dims * static_cast<int64_t>(g.members.items[k]) + d];
+            }
+            for (int d = 0; d < dims; ++d) out[dims * a + d] = weight > 0.0 ? sum[d] / weight : 0.0;
+        }
+    });
+    return out;
+}
+
+double rms_coupled_distance(const SurfaceAggregates& g, const std::vector<double>& points, int threads) {
+    const int64_t count = static_cast<int64_t>(g.size());
+    struct Sums {
+        double squared = 0.0, weight = 0.0;
+    };
+    const Sums total = ordered_block_reduce(
+        count, threads, kBlock, Sums{},
+        [&](int64_t begin, int64_t end, Sums& s) {
+            for (int64_t a = begin; a < end; ++a)
+                for (int64_t k = g.neighbours.begin(a); k < g.neighbours.end(a); ++k) {
+                    const int64_t b = g.neighbours.items[k];
+                    double d2 = 0.0;
+                    for (int d = 0; d < 3; ++d) d2 += (points[3 * b + d] - points[3 * a + d]) * (points[3 * b + d] - points[3 * a + d]);
+                    s.squared += g.coupling[k] * d2;
+                    s.weight += g.coupling[k];
+                }
+        },
+        [](Sums& t, const Sums& s) { t.squared += s.squared, t.weight += s.weight; });
+    return total.weight > 0.0 ? std::sqrt(total.squared / total.weight) : 0.0;
+}
+
+int aggregate_chebyshev(std::vector<double>& x, int dims, const SurfaceAggregates& g, const std::vector<double>& weights,
+                        const std::vector<double>& c, int threads) {
+    const int64_t count = static_cast<int64_t>(g.size());
+    if (dims < 1 || dims > 3 || x.size() != static_cast<std::size_t>(count) * dims)
+        throw InputError("aggregate_chebyshev: 1 to 3 values per aggregate expected");
+    if (!weights.empty() && weights.size() != g.size()) throw InputError("aggregate_chebyshev: one weight per aggregate expected");
+    const int degree = static_cast<int>(c.size()) - 1;
+    if (degree < 0 || count == 0) return 0;
+    if (degree == 0) {
+        for (double& v : x) v *= c[0];
+        return 0;
+    }
+    // y = Y t_in; FIRST: t_out = y, else t_out = 2 y - t_out (the older term, read first); acc += c_k t_out.
+    auto term = [&](const std::vector<double>& in, std::vector<double>& older_out, std::vector<double>& acc, double ck, bool first) {
+        parallel_blocks(count, threads, 1024, [&](int64_t begin, int64_t end) {
+            for (int64_t a = begin; a < end; ++a) {
+                double s[3] = {0.0, 0.0, 0.0}, total = 0.0;
+                for (int64_t k = g.neighbours.begin(a); k < g.neighbours.end(a); ++k) {
+                    const int64_t b = g.neighbours.items[k];
+                    total += g.coupling[k];
+                    for (int d = 0; d < dims; ++d) s[d] += g.coupling[k] * in[dims * b + d];
+                }
+                const double w = total > 0.0 ? (weights.empty() ? 1.0 : weights[a]) : 0.0;
+                for (int d = 0; d < dims; ++d) {
+                    const double own = in[dims * a + d];
+                    const double y = w > 0.0 ? own + w * (s[d] / total - own) : own;
+                    const double value = first ? y : 2.0 * y - older_out[dims * a + d];
+                    older_out[dims * a + d] = value;
+                    acc[dims * a + d] += ck * value;
+                }
+            }
+        });
+    };
+    std::vector<double> older = x, current(x.size()), acc(x.size());
+    for (std::size_t i = 0; i < x.size(); ++i) acc[i] = c[0] * x[i];
+    term(older, current, acc, c[1], true);
+    for (int k = 2; k <= degree; ++k) {
+        term(current, older, acc, c[static_cast<std::size_t>(k)], false);
+        older.swap(current);
+    }
+    x.swap(acc);
+    return degree;
+}
+
+}  // namespace meniscus
