@@ -133,7 +133,8 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
             restoration_normals = report.normals;
             stats.set_count("smoothing_reach", settings.reach / radius);
             stats.set_count("smoothing_equivalent_iterations", report.iterations);
-            stats.set_count("smoothing_applications", report.applications);
+            stats.set_count("smoothing_applications", report.applications);  // on the mesh
+            stats.set_count("smoothing_aggregates", static_cast<double>(report.aggregates));
         } else {
             MeshAdjacency along_walls;  // capped: the contact line smoothed along itself (post/container.h)
             if (!walls.empty()) along_walls.vertex_neighbours = smoothing_neighbours_at_walls(walls, adjacency.vertex_neighbours);
