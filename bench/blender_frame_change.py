@@ -36,7 +36,7 @@ import sys
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-PARTICLES = pathlib.Path("/work/shared/data/splashsurf/pentagonal_hexecontahedron_32286_particles.bgeo")
+PARTICLES = ROOT.parent / "shared" / "data" / "splashsurf" / "pentagonal_hexecontahedron_32286_particles.bgeo"  # ../shared beside the clone
 FRAME_DIR = ROOT / "build" / "bench" / "blender_frame_change"
 FRAME_NAME = "pentagonal_jitter_{:04d}.vtk"
 FRAMES = 4

@@ -30,7 +30,7 @@ import bpy
 import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-PARTICLES = pathlib.Path("/work/shared/data/splashsurf/pentagonal_hexecontahedron_32286_particles.bgeo")
+PARTICLES = ROOT.parent / "shared" / "data" / "splashsurf" / "pentagonal_hexecontahedron_32286_particles.bgeo"  # ../shared beside the clone
 VERSION = tuple(bpy.app.version)
 
 
