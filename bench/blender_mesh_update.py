@@ -159,16 +159,6 @@ def normals_attribute(mesh, surface):
     attribute.data.foreach_set("vector", surface.flat_normals)
 
 
-def read_corner_normals(mesh):
-    normals = np.empty(len(mesh.loops) * 3, dtype=np.float32)
-    if hasattr(mesh, "corner_normals"):
-        mesh.corner_normals.foreach_get("vector", normals)
-    else:
-        mesh.calc_normals_split()
-        mesh.loops.foreach_get("normal", normals)
-    return normals.reshape(-1, 3)
-
-
 # ---- the benchmark -------------------------------------------------------------------------------------------------
 
 def variants():
@@ -206,7 +196,9 @@ def run_once(scene, obj, surface, geometry, normals, frame):
     stages["next eval"] = timed(scene.frame_set, frame + 1)
     evaluated = obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
     started = time.perf_counter()
-    shading = read_corner_normals(evaluated)
+    from meniscus.blender import mesh_update
+
+    shading = mesh_update.read_corner_normals(evaluated)
     stages["normals read"] = time.perf_counter() - started
     return stages, shading
 

@@ -174,18 +174,6 @@ def write_after(module, mesh, surface, with_normals, clock):
     clock.add("clear_geometry + update() + rest", total - sum(clock.seconds.values()))
 
 
-def read_corner_normals(mesh):
-    import numpy as np
-
-    normals = np.empty(len(mesh.loops) * 3, dtype=np.float32)
-    if hasattr(mesh, "corner_normals"):
-        mesh.corner_normals.foreach_get("vector", normals)
-    else:
-        mesh.calc_normals_split()
-        mesh.loops.foreach_get("normal", normals)
-    return normals.reshape(-1, 3)
-
-
 def measure_path(bpy, module, obj, surfaces, path, with_normals, repeat, version):
     """Medians of each step over `repeat` writes (after one untimed write), plus eval, next eval and normals read."""
     import numpy as np
@@ -205,7 +193,7 @@ def measure_path(bpy, module, obj, surfaces, path, with_normals, repeat, version
         obj.data.update_tag()
         clock.run("next eval", bpy.context.view_layer.update)
         evaluated = obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
-        shading = clock.run("normals read", read_corner_normals, evaluated)
+        shading = clock.run("normals read", module.read_corner_normals, evaluated)
         if index > 0:
             runs.append(clock.seconds)
         last = (surface, shading)
@@ -343,7 +331,7 @@ def measure_alternatives(bpy, module, obj, surfaces, repeat, version):
             started = time.perf_counter()
             bpy.context.view_layer.update()
             next_evaluations.append(time.perf_counter() - started)
-        shading = read_corner_normals(obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).data)
+        shading = module.read_corner_normals(obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).data)
         dots = np.clip(np.einsum("ij,ij->i", shading, corner_normals), -1.0, 1.0)
         angles = np.degrees(np.arccos(dots))
         normals_rows[name] = {"write": statistics.median(writes), "eval": statistics.median(evaluations),

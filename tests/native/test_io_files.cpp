@@ -388,3 +388,32 @@ TEST_CASE("truncated shared files give FormatError", "[io]") {
         }
     }
 }
+
+TEST_CASE("particles written as PLY, XYZ and VTK read back; an attribute of the wrong size is refused by name", "[io]") {
+    TempDir dir("write_particles");
+    ParticleData p;
+    p.positions = {0.f, 0.f, 0.f, 1.f, 2.f, 3.f, -1.f, 0.5f, 2.f};
+    p.attributes.push_back({"density", 1, {1000.f, 998.f, 1002.f}});
+    p.attributes.push_back({"velocity", 3, {1.f, 0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f}});
+    for (const char* ext : {".ply", ".vtk", ".xyz"}) {
+        const std::string path = dir.file(std::string("particles") + ext);
+        write_particles(p, path);
+        const ParticleData back = read_particles(path);
+        CHECK(back.positions == p.positions);
+        if (std::string(ext) != ".xyz") {  // XYZ holds positions only
+            const Attribute* velocity = find_attribute(back.attributes, "velocity");
+            REQUIRE(velocity != nullptr);
+            CHECK(velocity->values == p.attributes[1].values);
+        }
+    }
+    p.attributes[1].values.pop_back();
+    try {
+        write_particles(p, dir.file("bad.ply"));
+        FAIL("an attribute with a value missing was written");
+    } catch (const InputError& e) {
+        const std::string message = e.what();
+        CHECK(message.find("bad.ply") != std::string::npos);
+        CHECK(message.find("particle attribute 'velocity' has 8 values with 3 components, expected one tuple per particle (3)") !=
+              std::string::npos);
+    }
+}

@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include "base/errors.h"
+
 namespace meniscus {
 
 struct Attribute {
@@ -24,6 +26,17 @@ struct AttributeInput {
     int components = 1;
     bool integral = false;  // whole numbers (ids, labels): the nearest particle's value, not an average
 };
+
+// Throws InputError unless every attribute holds one tuple per element (count of them): "<where>: <element>
+// attribute 'name' has N values with C components, expected one tuple per <element> (count)".
+inline void require_one_tuple_per_element(const std::vector<Attribute>& attributes, std::size_t count, const std::string& where,
+                                          const std::string& element) {
+    for (const Attribute& a : attributes)
+        if (a.components <= 0 || a.values.size() != count * static_cast<std::size_t>(a.components))
+            throw InputError(where + ": " + element + " attribute '" + a.name + "' has " + std::to_string(a.values.size()) +
+                             " values with " + std::to_string(a.components) + " components, expected one tuple per " + element +
+                             " (" + std::to_string(count) + ")");
+}
 
 // Finds an attribute by name; nullptr when absent.
 template <class Container>

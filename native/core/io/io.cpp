@@ -239,11 +239,7 @@ void write_particles(const ParticleData& particles, const std::string& path) {
     if (particles.positions.size() % 3 != 0)
         throw InputError("cannot write particles to " + path + ": positions has " + std::to_string(particles.positions.size()) +
                          " floats, not a multiple of 3");
-    for (const Attribute& a : particles.attributes)
-        if (a.components < 1 || a.values.size() != particles.size() * static_cast<std::size_t>(a.components))
-            throw InputError("cannot write particles to " + path + ": attribute '" + a.name + "' has " + std::to_string(a.values.size()) +
-                             " values with " + std::to_string(a.components) + " components for " + std::to_string(particles.size()) +
-                             " particles");
+    require_one_tuple_per_element(particles.attributes, particles.size(), "cannot write particles to " + path, "particle");
     write(particles, path);
 }
 

@@ -25,12 +25,7 @@ void validate_mesh_arrays(const TriMesh& mesh, const std::string& where) {
     if (!mesh.normals.empty() && mesh.normals.size() != mesh.vertices.size())
         throw InputError(where + ": normals must be empty or 3 floats per vertex, got " + std::to_string(mesh.normals.size()) +
                          " for " + std::to_string(nv) + " vertices");
-    for (const Attribute& a : mesh.attributes) {
-        if (a.components <= 0 || a.values.size() != nv * static_cast<std::size_t>(a.components))
-            throw InputError(where + ": vertex attribute '" + a.name + "' has " + std::to_string(a.values.size()) +
-                             " values with " + std::to_string(a.components) + " components, expected one tuple per vertex (" +
-                             std::to_string(nv) + ")");
-    }
+    require_one_tuple_per_element(mesh.attributes, nv, where, "vertex");
 }
 
 std::size_t first_non_finite(const std::vector<float>& values) {
