@@ -228,7 +228,8 @@ def measure_alternatives(bpy, module, obj, surfaces, repeat, version):
     flat_vertices = np.ascontiguousarray(vertices, np.float32).reshape(-1)
     corners = np.ascontiguousarray(triangles, np.int32).reshape(-1)
     starts = np.arange(0, len(corners), 3, dtype=np.int32)
-    edges, corner_edges = module._compute_edges(np.ascontiguousarray(triangles, np.int32), len(vertices))
+    face_corners, following, _ = module._face_corners(np.ascontiguousarray(triangles, np.int32), np.zeros((0, 4), np.int32))
+    edges, corner_edges = module._compute_edges(face_corners, following, len(vertices))
     result = {}
 
     def add(name, function, setup=None):
@@ -263,7 +264,7 @@ def measure_alternatives(bpy, module, obj, surfaces, repeat, version):
             setup=lambda: mesh.polygons.foreach_set("use_smooth", np.ones(len(starts), dtype=bool)))
     add("edges: update(calc_edges=True) (Blender's hash maps)", lambda: mesh.update(calc_edges=True))
     add("edges: computed in numpy (mesh_update._compute_edges)",
-        lambda: module._compute_edges(np.ascontiguousarray(triangles, np.int32), len(vertices)))
+        lambda: module._compute_edges(face_corners, following, len(vertices)))
     add("edges: numpy argsort instead of the packed sort", lambda: _edges_by_argsort(triangles))
     add("edges: edges.foreach_set('vertices') int32",
         lambda: mesh.edges.foreach_set("vertices", edges.reshape(-1)))
