@@ -37,7 +37,8 @@ struct UnsmoothedSurface;
 // The cube size (in r) up to which the reach stays what the user set. Above it the reach grows with the cube, as the
 // paper's iterations' reach does (each moves a fraction of an edge): coarse marching cubes alias from frame to frame
 // and need it. Measured on the sequence (slope flicker / pysplashsurf's): c = 1.0: 1.06 at 4 r without the growth,
-// 0.92 at 5.35 r, 0.82 at 8 r; c = 0.75: 0.88 at 4 r, 0.73 at 6 r.
+// 0.92 at 5.35 r, 0.90 at 8 and 8.56 r, 0.89 at 12 r, 0.93 at 20 r (a floor: the slope of facets 1 r wide, not the
+// smoothing); c = 0.75: 0.88 at 4 r, 0.73 at 6 r.
 constexpr double kReferenceCube = 0.5;
 // The reach of 64 explicit iterations at c = 0.5 (sqrt(64) x the RMS edge of a decimated marching-cubes mesh, 1.07
 // cube edges, 1.05-1.09 on the shared frames at c = 0.25-1.0): the setting the README's figures were measured with.
