@@ -195,9 +195,9 @@ def run_once(scene, obj, surface, geometry, normals, frame):
     mesh.update_tag()
     stages["next eval"] = timed(scene.frame_set, frame + 1)
     evaluated = obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
-    started = time.perf_counter()
     from meniscus.blender import mesh_update
 
+    started = time.perf_counter()
     shading = mesh_update.read_corner_normals(evaluated)
     stages["normals read"] = time.perf_counter() - started
     return stages, shading

@@ -27,15 +27,13 @@ TriMesh two_close_spheres() {
     return m;
 }
 
-std::vector<float> unit_areas(const TriMesh& m) { return std::vector<float>(m.num_vertices(), 1.0f); }
-
 }  // namespace
 
 TEST_CASE("surface aggregates: edge-connected pieces of one cell, symmetric coupling", "[aggregates]") {
     const TriMesh m = two_close_spheres();
     const MeshAdjacency adjacency = build_adjacency(m, 2);
     const double cell = 0.5;
-    const SurfaceAggregates g = aggregate_surface(m, adjacency, unit_areas(m), cell, 2);
+    const SurfaceAggregates g = aggregate_surface(m, adjacency, cell, 2);
     REQUIRE(g.size() > 20);
     REQUIRE(g.size() < m.num_vertices() / 4);
     int32_t components = 0;
@@ -61,7 +59,6 @@ TEST_CASE("surface aggregates: edge-connected pieces of one cell, symmetric coup
                 if (g.of_vertex[adjacency.vertex_neighbours.items[e]] == static_cast<int32_t>(a)) inside.unite(v, adjacency.vertex_neighbours.items[e]);
         }
         for (int64_t k = g.members.begin(a); k < g.members.end(a); ++k) CHECK(inside.find(g.members.items[k]) == inside.find(first));
-        CHECK(g.area[a] == Approx(g.members.size(a)));
         // Coupled both ways with the same number of edges, never across the gap between the spheres.
         for (int64_t k = g.neighbours.begin(a); k < g.neighbours.end(a); ++k) {
             const int32_t b = g.neighbours.items[k];
@@ -82,7 +79,7 @@ TEST_CASE("surface aggregates: restriction keeps constants, the coarse heat filt
     const MeshAdjacency adjacency = build_adjacency(m, 2);
     std::vector<float> areas(m.num_vertices());
     for (std::size_t i = 0; i < areas.size(); ++i) areas[i] = 0.5f + 0.001f * static_cast<float>(i % 7);
-    const SurfaceAggregates g = aggregate_surface(m, adjacency, areas, 0.3, 2);
+    const SurfaceAggregates g = aggregate_surface(m, adjacency, 0.3, 2);
     const std::vector<float> constant(m.num_vertices(), 2.5f);
     for (double v : restrict_to_aggregates(g, areas, constant.data(), 1, 2)) CHECK(v == Approx(2.5).epsilon(1e-12));
     const std::vector<double> centre = restrict_to_aggregates(g, areas, m.vertices.data(), 3, 2);
@@ -93,8 +90,19 @@ TEST_CASE("surface aggregates: restriction keeps constants, the coarse heat filt
     aggregate_chebyshev(ones, 1, g, {}, heat_coefficients(50.0, 1e-3), 2);
     for (double v : ones) CHECK(v == Approx(1.0).epsilon(1e-9));
 
-    // A spike spreads out, keeps its mean (the coupling is symmetric), and the bits do not depend on the threads;
-    // an aggregate of weight 0 keeps its value.
+    // A spike spreads out and keeps sum(degree x), degree the total coupling (the coupling-weighted mean is a random
+    // walk whose stationary weights are the degrees).
+    std::vector<double> degree(g.size(), 0.0);
+    for (std::size_t a = 0; a < g.size(); ++a)
+        for (int64_t k = g.neighbours.begin(a); k < g.neighbours.end(a); ++k) degree[a] += g.coupling[k];
+    std::vector<double> spread(g.size(), 0.0);
+    spread[0] = 1.0;
+    aggregate_chebyshev(spread, 1, g, {}, heat_coefficients(20.0, 1e-3), 2);
+    double kept = 0.0;
+    for (std::size_t a = 0; a < g.size(); ++a) kept += degree[a] * spread[a];
+    CHECK(kept == Approx(degree[0]).epsilon(1e-9));
+    CHECK(spread[0] < 0.1);
+    // The bits do not depend on the threads; an aggregate of weight 0 keeps its value.
     std::vector<double> weights(g.size(), 1.0);
     weights[g.size() / 2] = 0.0;
     std::vector<std::vector<double>> results;
@@ -107,7 +115,7 @@ TEST_CASE("surface aggregates: restriction keeps constants, the coarse heat filt
     }
     CHECK(results[0] == results[1]);
     CHECK(results[0] == results[2]);
-    CHECK(results[0][0] < 0.5);
+    CHECK(results[0][0] < 0.1);
     CHECK(results[0][g.size() / 2] == 0.25);
 }
 
@@ -139,4 +147,54 @@ TEST_CASE("heat smoothing: the return's low-pass on aggregates matches the mesh'
     TriMesh again = noisy;
     heat_smooth(again, adjacency, {}, s, 3);
     CHECK(again.vertices == on_aggregates.vertices);
+}
+
+TEST_CASE("surface aggregates: empty meshes, lone vertices, zero weights and scenes too wide for the keys", "[aggregates]") {
+    TriMesh empty;
+    CHECK(aggregate_surface(empty, build_adjacency(empty, 2), 0.5, 2).size() == 0);
+
+    // Lone vertices (in no triangle) are aggregates of their own, coupled to nothing; zero weights give plain means.
+    TriMesh m = make_noisy_sphere(4, 1.0, 0.03);  // edges ~0.066: cells of 1.5 r = 0.15 at r = 0.1
+    add_vertex(m, {5.0, 5.0, 5.0});
+    add_vertex(m, {5.1, 5.0, 5.0});
+    const MeshAdjacency adjacency = build_adjacency(m, 2);
+    const SurfaceAggregates g = aggregate_surface(m, adjacency, 0.5, 2);
+    const int32_t lone = g.of_vertex[m.num_vertices() - 1];
+    CHECK(g.members.size(lone) == 1);
+    CHECK(g.neighbours.size(lone) == 0);
+    CHECK(g.of_vertex[m.num_vertices() - 2] != lone);
+    const std::vector<float> zero(m.num_vertices(), 0.0f), ones(m.num_vertices(), 1.0f);
+    const std::vector<double> by_zero = restrict_to_aggregates(g, zero, m.vertices.data(), 3, 2);
+    const std::vector<double> by_ones = restrict_to_aggregates(g, ones, m.vertices.data(), 3, 2);
+    CHECK(by_zero == by_ones);
+    CHECK_THROWS_AS(restrict_to_aggregates(g, zero, m.vertices.data(), 4, 2), InputError);
+    CHECK_THROWS_AS(restrict_to_aggregates(g, std::vector<float>(3, 1.0f), m.vertices.data(), 3, 2), InputError);
+    HeatSmoothingSettings s;
+    s.reach = 0.5;
+    s.particle_radius = 0.1;
+    TriMesh smoothed = m;
+    const HeatSmoothingReport report = heat_smooth(smoothed, adjacency, {}, s, 2);
+    CHECK(report.aggregates > 0);
+    for (float x : smoothed.vertices) REQUIRE(std::isfinite(x));
+    CHECK(smoothed.vertices[3 * (m.num_vertices() - 1)] == 5.1f);  // nothing to average with: not moved
+
+    // Two pieces 1e6 cells of 0.15 apart fit the keys' 21 bits, 2.7e6 do not: then no aggregates, and the smoothing
+    // low-passes on the mesh.
+    for (double offset : {1.5e5, 4.0e5}) {
+        INFO("offset " << offset);
+        TriMesh wide = make_noisy_sphere(4, 1.0, 0.03);
+        const TriMesh far = make_noisy_sphere(4, 1.0, 0.03);
+        const int32_t base = static_cast<int32_t>(wide.num_vertices());
+        for (std::size_t i = 0; i < far.num_vertices(); ++i)
+            add_vertex(wide, {far.vertices[3 * i] + offset, far.vertices[3 * i + 1], far.vertices[3 * i + 2]});
+        for (int32_t i : far.triangles) wide.triangles.push_back(i + base);
+        const MeshAdjacency wide_adjacency = build_adjacency(wide, 2);
+        const bool fits = offset < 2.0e5;
+        CHECK((aggregate_surface(wide, wide_adjacency, 0.15, 2).size() > 0) == fits);
+        TriMesh wide_smoothed = wide;
+        const HeatSmoothingReport wide_report = heat_smooth(wide_smoothed, wide_adjacency, {}, s, 2);
+        CHECK((wide_report.aggregates > 0) == fits);
+        CHECK(wide_report.applications > 0);
+        for (float x : wide_smoothed.vertices) REQUIRE(std::isfinite(x));
+    }
 }

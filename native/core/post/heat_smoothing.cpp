@@ -20,6 +20,9 @@ namespace meniscus {
 namespace {
 
 constexpr int64_t kBlock = 4096;
+// Cap of a filter's equivalent explicit iterations: the coefficients cost O(N), the applications O(sqrt N); no real
+// scene comes near (c = 0.25: N ~ 1100 for the return on the mesh).
+constexpr double kMaxIterations = 1.0e5;
 
 double seconds_since(std::chrono::steady_clock::time_point& mark) {
     const auto now = std::chrono::steady_clock::now();
@@ -332,6 +335,13 @@ int aggregate_low_pass(std::vector<float>& value, const TriMesh& mesh, const Mes
     std::vector<double> mass(aggregates.size(), 0.0);
     for (std::size_t a = 0; a < aggregates.size(); ++a)
         for (int64_t k = aggregates.members.begin(a); k < aggregates.members.end(a); ++k) mass[a] += valence[aggregates.members.items[k]];
+    // A low-pass stays within the values it averages; the truncated series could overshoot where the denominator
+    // below is small.
+    double lowest = 0.0, highest = 0.0;
+    if (!coarse.empty()) {
+        const auto range = std::minmax_element(coarse.begin(), coarse.end());
+        lowest = *range.first, highest = *range.second;
+    }
     const std::vector<double> centre = restrict_to_aggregates(aggregates, areas, mesh.vertices.data(), 3, threads);
     const double coarse_edge = rms_coupled_distance(aggregates, centre, threads);
     report.coarse_edge = coarse_edge;
@@ -351,9 +361,9 @@ int aggregate_low_pass(std::vector<float>& value, const TriMesh& mesh, const Mes
             pair[2 * a + 1] = rho;
         }
         report.coarse_applications += aggregate_chebyshev(
-            pair, 2, aggregates, {}, heat_coefficients(std::pow(reach / coarse_edge, 2.0), tolerance), threads);
+            pair, 2, aggregates, {}, heat_coefficients(std::min(std::pow(reach / coarse_edge, 2.0), kMaxIterations), tolerance), threads);
         for (int64_t a = 0; a < na; ++a)
-            if (pair[2 * a + 1] > 0.0) coarse[a] = pair[2 * a] / pair[2 * a + 1];
+            if (pair[2 * a + 1] > 0.0) coarse[a] = std::min(std::max(pair[2 * a] / pair[2 * a + 1], lowest), highest);
     }
     // (1 - d^2 / (2 cell)^2)^2: smooth, zero two cells away, and the same bits with any maths library.
     const double falloff = 1.0 / (4.0 * cell * cell);
@@ -481,7 +491,7 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
 
     report.edge = rms_edge_length(mesh, adjacency, threads);
     if (!(report.edge > 0.0)) return report;
-    report.iterations = std::min((settings.reach / report.edge) * (settings.reach / report.edge), 1.0e5);
+    report.iterations = std::min((settings.reach / report.edge) * (settings.reach / report.edge), kMaxIterations);
     const double time = 0.25 * settings.reach * settings.reach;
     report.parts = settings.parts > 0 ? settings.parts
                                       : std::max(1, static_cast<int>(std::ceil(time / (kPartTime * radius * radius) - 0.05)));
@@ -491,14 +501,14 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
         throw InputError("heat_smooth: the unsmoothed surface does not belong to this mesh");
 
     const double local_scale = (settings.local_scale > 0.0 ? settings.local_scale : kLocalScale) * radius;
-    const double return_iterations = std::pow(local_scale / report.edge, 2.0);
+    const double return_iterations = std::min(std::pow(local_scale / report.edge, 2.0), kMaxIterations);
     std::vector<float> before, offset, normals, areas;
     if (settings.local_return) offset.resize(static_cast<std::size_t>(nv));
     // Aggregates for the return's low-pass when the mesh is fine (built once, from the first part's surface: the parts
     // move vertices by a fraction of a cell).
     const double aggregate_size = settings.aggregate_size >= 0.0 ? settings.aggregate_size : kAggregateCell;
     const double cell = std::max(aggregate_size * radius, 2.0 * report.edge);
-    const bool coarse_return = aggregate_size > 0.0 && cell <= kAggregateCellLimit * aggregate_size * radius;
+    bool coarse_return = aggregate_size > 0.0 && cell <= kAggregateCellLimit * aggregate_size * radius;
     SurfaceAggregates aggregates;
     for (int part = 0; part < report.parts; ++part) {
         if (settings.local_return) before = mesh.vertices;
@@ -517,17 +527,20 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
                     offset[i] = d;
                 }
             });
-            if (coarse_return) {
-                if (part == 0) {
-                    aggregates = aggregate_surface(mesh, adjacency, areas, cell, threads);
-                    report.aggregates = aggregates.size();
-                }
-                report.applications += aggregate_low_pass(offset, mesh, adjacency, aggregates, areas, cell, local_scale,
-                                                          settings.return_tolerance > 0.0 ? settings.return_tolerance : kReturnTolerance,
-                                                          report.edge, threads, report);
-            } else if (!(settings.grid_return && grid_average(mesh.vertices, areas, weights, offset, local_scale, threads)))
-                report.applications += heat_filter(offset, 1, adjacency, {}, return_iterations,
-                                                   settings.return_tolerance > 0.0 ? settings.return_tolerance : kReturnTolerance, threads);
+            if (coarse_return && part == 0) {
+                aggregates = aggregate_surface(mesh, adjacency, cell, threads);
+                report.aggregates = aggregates.size();
+                coarse_return = aggregates.size() > 0;  // none: the scene spans too many cells for the keys
+            }
+            const double tolerance = settings.return_tolerance > 0.0 ? settings.return_tolerance : kReturnTolerance;
+            if (settings.grid_return && grid_average(mesh.vertices, areas, weights, offset, local_scale, threads)) {
+                // the research variant, when asked for and the grid fits
+            } else if (coarse_return) {
+                report.applications +=
+                    aggregate_low_pass(offset, mesh, adjacency, aggregates, areas, cell, local_scale, tolerance, report.edge, threads, report);
+            } else {
+                report.applications += heat_filter(offset, 1, adjacency, {}, return_iterations, tolerance, threads);
+            }
         }
         parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
             for (int64_t i = begin; i < end; ++i) {

@@ -39,21 +39,23 @@ void for_each_run(const std::vector<int32_t>& sorted, Visit&& visit) {
 
 }  // namespace
 
-SurfaceAggregates aggregate_surface(const TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& vertex_areas,
-                                    double cell, int threads) {
+SurfaceAggregates aggregate_surface(const TriMesh& mesh, const MeshAdjacency& adjacency, double cell, int threads) {
     const CsrList& nb = adjacency.vertex_neighbours;
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
     require_row_per_vertex(nb, mesh.num_vertices(), "aggregate_surface");
-    if (vertex_areas.size() != mesh.num_vertices())
-        throw InputError("aggregate_surface: got " + std::to_string(vertex_areas.size()) + " areas for " + std::to_string(nv) + " vertices");
     if (!(cell > 0.0) || !std::isfinite(cell)) throw InputError("aggregate_surface: the cell size must be a positive number");
     SurfaceAggregates g;
     if (nv == 0) return g;
 
-    double lo[3] = {INFINITY, INFINITY, INFINITY};
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int64_t i = 0; i < nv; ++i)
-        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], double(mesh.vertices[3 * i + k]));
-    // Cell coordinates packed in one integer (21 bits each: a scene 2 million cells across).
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = std::min(lo[k], double(mesh.vertices[3 * i + k]));
+            hi[k] = std::max(hi[k], double(mesh.vertices[3 * i + k]));
+        }
+    for (int k = 0; k < 3; ++k)
+        if (!((hi[k] - lo[k]) / cell < 2097151.0)) return g;  // beyond the keys' 21 bits (or not finite)
+    // Cell coordinates packed in one integer, 21 bits each.
     std::vector<int64_t> key(static_cast<std::size_t>(nv));
     parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t i = begin; i < end; ++i) {
@@ -93,7 +95,6 @@ SurfaceAggregates aggregate_surface(const TriMesh& mesh, const MeshAdjacency& ad
     std::vector<std::vector<int32_t>> block_items(static_cast<std::size_t>(blocks));
     std::vector<std::vector<float>> block_coupling(static_cast<std::size_t>(blocks));
     g.neighbours.offsets.assign(static_cast<std::size_t>(count) + 1, 0);
-    g.area.assign(static_cast<std::size_t>(count), 0.0);
     parallel_for(blocks, threads, [&](int64_t b) {
         std::vector<int32_t> crossing;
         for (int64_t a = b * kRowsPerBlock; a < std::min<int64_t>(count, (b + 1) * kRowsPerBlock); ++a) {
@@ -105,9 +106,6 @@ SurfaceAggregates aggregate_surface(const TriMesh& mesh, const MeshAdjacency& ad
                 ++distinct;
             });
             g.neighbours.offsets[a + 1] = distinct;
-            double area = 0.0;
-            for (int64_t k = g.members.begin(a); k < g.members.end(a); ++k) area += vertex_areas[g.members.items[k]];
-            g.area[a] = area;
         }
     });
     for (int32_t a = 0; a < count; ++a) g.neighbours.offsets[a + 1] += g.neighbours.offsets[a];
@@ -121,16 +119,20 @@ SurfaceAggregates aggregate_surface(const TriMesh& mesh, const MeshAdjacency& ad
     return g;
 }
 
-std::vector<double> restrict_to_aggregates(const SurfaceAggregates& g, const std::vector<float>& vertex_areas, const float* values,
+std::vector<double> restrict_to_aggregates(const SurfaceAggregates& g, const std::vector<float>& vertex_weights, const float* values,
                                            int dims, int threads) {
     const int64_t count = static_cast<int64_t>(g.size());
+    if (dims < 1 || dims > 3) throw InputError("restrict_to_aggregates: 1 to 3 values per vertex expected");
+    if (vertex_weights.size() != g.of_vertex.size())
+        throw InputError("restrict_to_aggregates: got " + std::to_string(vertex_weights.size()) + " weights for " +
+                         std::to_string(g.of_vertex.size()) + " vertices");
     std::vector<double> out(static_cast<std::size_t>(count) * dims, 0.0);
     parallel_blocks(count, threads, 256, [&](int64_t begin, int64_t end) {
         for (int64_t a = begin; a < end; ++a) {
             double sum[3] = {0.0, 0.0, 0.0}, weight = 0.0;
             for (int64_t k = g.members.begin(a); k < g.members.end(a); ++k) {
                 const int64_t v = g.members.items[k];
-                const double w = vertex_areas[v];
+                const double w = vertex_weights[v];
                 weight += w;
                 for (int d = 0; d < dims; ++d) sum[d] += w * values[dims * v + d];
             }
@@ -148,6 +150,7 @@ std::vector<double> restrict_to_aggregates(const SurfaceAggregates& g, const std
 
 double rms_coupled_distance(const SurfaceAggregates& g, const std::vector<double>& points, int threads) {
     const int64_t count = static_cast<int64_t>(g.size());
+    if (points.size() != 3 * g.size()) throw InputError("rms_coupled_distance: 3 coordinates per aggregate expected");
     struct Sums {
         double squared = 0.0, weight = 0.0;
     };

@@ -2,9 +2,10 @@
 // iterations' worth on millions of vertices). Vertices are grouped into aggregates: the pieces of the surface inside
 // one cell of a spatial grid that the mesh's own edges connect, so two sheets or a droplet beside a pool that pass
 // through the same cell stay apart. Aggregates are coupled where mesh edges cross between them, weighted by how many
-// do (a long shared border couples more than a corner). A smooth field restricted to the aggregates (area-weighted
-// means), filtered there and prolonged back (each vertex takes its aggregate's value) loses nothing a short fine
-// filter does not restore, at a fraction of the cost.
+// do (a long shared border couples more than a corner). A field smooth at several cells' scale, restricted to the
+// aggregates (weighted means), filtered there and prolonged back (post/heat_smoothing.cpp: a distance-weighted mean
+// over the vertex's aggregate and the coupled ones, then a short fine blend) keeps what a filter on the mesh would
+// give, at a fraction of the cost.
 //
 // Deterministic: aggregates are numbered by their smallest vertex, rows and sums run in index order.
 #pragma once
@@ -21,17 +22,17 @@ struct SurfaceAggregates {
     CsrList members;                 // vertices of each aggregate, ascending
     CsrList neighbours;              // aggregates sharing a mesh edge with each aggregate, ascending
     std::vector<float> coupling;     // per neighbours item: the number of mesh edges between the two
-    std::vector<double> area;        // per aggregate: the sum of its vertices' areas
 
     std::size_t size() const { return members.rows(); }
 };
 
-// Groups the vertices by cells of edge `cell` (scene units); vertex_areas: one per vertex (weights of the means).
-SurfaceAggregates aggregate_surface(const TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& vertex_areas,
-                                    double cell, int threads);
+// Groups the vertices by cells of edge `cell` (scene units). Returns no aggregates at all when the mesh spans more than
+// 2^21 cells along an axis (the cell keys' range); callers then filter on the mesh.
+SurfaceAggregates aggregate_surface(const TriMesh& mesh, const MeshAdjacency& adjacency, double cell, int threads);
 
-// Area-weighted mean per aggregate of `dims` values per vertex (vertex_areas as given to aggregate_surface).
-std::vector<double> restrict_to_aggregates(const SurfaceAggregates& aggregates, const std::vector<float>& vertex_areas,
+// Weighted mean per aggregate of `dims` (1 to 3) values per vertex, one weight per vertex (where an aggregate's weights
+// add up to 0: the plain mean).
+std::vector<double> restrict_to_aggregates(const SurfaceAggregates& aggregates, const std::vector<float>& vertex_weights,
                                            const float* values, int dims, int threads);
 
 // Root-mean-square distance between coupled aggregates' points (3 per aggregate), weighted by the coupling: the
