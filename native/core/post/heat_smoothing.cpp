@@ -317,24 +317,49 @@ bool grid_average(const std::vector<float>& positions, const std::vector<float>&
     return true;
 }
 
-// The low-pass of the returned displacement on the surface's aggregates (post/surface_aggregates.h) instead of the
-// mesh: the field is smooth at the return's reach (9 r), many cells wide, so the aggregates carry it whole, and the
-// ~(9 r / e)^2 equivalent iterations run on a graph (cell / e)^2 times smaller. Restricted as area-weighted means,
-// filtered with the same heat kernel (its N from the aggregates' own coupled distance), prolonged as a distance-
-// weighted mean over the vertex's aggregate and the ones coupled to it (no steps at aggregate borders), then blended
-// by a fine low-pass of half a cell. Measured against the mesh's own low-pass (c = 0.25 and 0.5): hfL, volume and
-// droplets the same to the third digit, with a third of the applications.
-int aggregate_low_pass(std::vector<float>& value, const TriMesh& mesh, const MeshAdjacency& adjacency, const SurfaceAggregates& aggregates,
+// The surface's aggregates (post/surface_aggregates.h) with what the return's low-pass needs of them, built once per
+// smoothing. The mesh's umbrella low-pass keeps sum(valence x), so the aggregates' one is made to keep it too (and
+// then returns what the mesh's would): values are restricted as valence-weighted means, and filtered as a normalised
+// convolution of the density mass / coupling (mass: the members' valences). The coupling-weighted mean alone keeps
+// sum(coupling x) (a random walk's stationary weights): a small corner piece has much border for its size and would
+// draw the returned displacement to itself (hilbert2 at c = 0.5 kept 0.977 of its volume before the final
+// correction, the mesh's low-pass 1.010). f(P)(rho x) / f(P)(rho) is f(P^T) on the mass-weighted field.
+struct ReturnAggregates {
+    SurfaceAggregates aggregates;
+    std::vector<float> valence;   // per vertex
+    std::vector<double> density;  // per aggregate: mass / coupling (0 when coupled to nothing)
+};
+
+ReturnAggregates return_aggregates(const TriMesh& mesh, const MeshAdjacency& adjacency, double cell, int threads) {
+    ReturnAggregates r;
+    r.aggregates = aggregate_surface(mesh, adjacency, cell, threads);
+    const SurfaceAggregates& g = r.aggregates;
+    const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
+    r.valence.resize(static_cast<std::size_t>(nv));
+    for (int64_t i = 0; i < nv; ++i) r.valence[i] = static_cast<float>(adjacency.vertex_neighbours.size(i));
+    r.density.assign(g.size(), 0.0);
+    for (std::size_t a = 0; a < g.size(); ++a) {
+        double mass = 0.0, degree = 0.0;
+        for (int64_t k = g.members.begin(a); k < g.members.end(a); ++k) mass += r.valence[g.members.items[k]];
+        for (int64_t k = g.neighbours.begin(a); k < g.neighbours.end(a); ++k) degree += g.coupling[k];
+        r.density[a] = degree > 0.0 ? mass / degree : 0.0;
+    }
+    return r;
+}
+
+// The low-pass of the returned displacement on the aggregates instead of the mesh: the field is smooth at the
+// return's reach (9 r), many cells wide, so the aggregates carry it whole, and the ~(9 r / e)^2 equivalent iterations
+// run on a graph (cell / e)^2 times smaller. Restricted and filtered as ReturnAggregates says, with the same heat
+// kernel (its N from the aggregates' own coupled distance), prolonged as a distance-weighted mean over the vertex's
+// aggregate and the ones coupled to it (no steps at aggregate borders), then blended by a fine low-pass of half a
+// cell. Measured against the mesh's own low-pass (c = 0.25 and 0.5): hfL, volume and droplets the same to the third
+// digit, with a third of the applications.
+int aggregate_low_pass(std::vector<float>& value, const TriMesh& mesh, const MeshAdjacency& adjacency, const ReturnAggregates& coarse_surface,
                        const std::vector<float>& areas, double cell, double reach, double tolerance, double edge, int threads,
                        HeatSmoothingReport& report) {
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
-    // The mesh's umbrella low-pass keeps sum(valence x): so does this one, which then returns what the mesh's would.
-    std::vector<float> valence(static_cast<std::size_t>(nv));
-    for (int64_t i = 0; i < nv; ++i) valence[i] = static_cast<float>(adjacency.vertex_neighbours.size(i));
-    std::vector<double> coarse = restrict_to_aggregates(aggregates, valence, value.data(), 1, threads);
-    std::vector<double> mass(aggregates.size(), 0.0);
-    for (std::size_t a = 0; a < aggregates.size(); ++a)
-        for (int64_t k = aggregates.members.begin(a); k < aggregates.members.end(a); ++k) mass[a] += valence[aggregates.members.items[k]];
+    const SurfaceAggregates& aggregates = coarse_surface.aggregates;
+    std::vector<double> coarse = restrict_to_aggregates(aggregates, coarse_surface.valence, value.data(), 1, threads);
     // A low-pass stays within the values it averages; the truncated series could overshoot where the denominator
     // below is small.
     double lowest = 0.0, highest = 0.0;
@@ -346,19 +371,11 @@ int aggregate_low_pass(std::vector<float>& value, const TriMesh& mesh, const Mes
     const double coarse_edge = rms_coupled_distance(aggregates, centre, threads);
     report.coarse_edge = coarse_edge;
     if (coarse_edge > 0.0) {
-        // The coupling-weighted mean keeps sum(coupling x) (a random walk's stationary weights), not sum(mass x): a
-        // small corner piece has much border for its size and would draw the returned displacement to itself
-        // (hilbert2 at c = 0.5 kept 0.977 of its volume before the final correction, the mesh's low-pass 1.010).
-        // Filtered as a normalised convolution of the density mass / coupling instead, f(P)(rho x) / f(P)(rho),
-        // which is f(P^T) on the mass-weighted field.
         const int64_t na = static_cast<int64_t>(aggregates.size());
-        std::vector<double> pair(2 * static_cast<std::size_t>(na));
+        std::vector<double> pair(2 * static_cast<std::size_t>(na));  // (rho x, rho) per aggregate
         for (int64_t a = 0; a < na; ++a) {
-            double degree = 0.0;
-            for (int64_t k = aggregates.neighbours.begin(a); k < aggregates.neighbours.end(a); ++k) degree += aggregates.coupling[k];
-            const double rho = degree > 0.0 ? mass[a] / degree : 0.0;
-            pair[2 * a] = rho * coarse[a];
-            pair[2 * a + 1] = rho;
+            pair[2 * a] = coarse_surface.density[a] * coarse[a];
+            pair[2 * a + 1] = coarse_surface.density[a];
         }
         report.coarse_applications += aggregate_chebyshev(
             pair, 2, aggregates, {}, heat_coefficients(std::min(std::pow(reach / coarse_edge, 2.0), kMaxIterations), tolerance), threads);
@@ -509,7 +526,7 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     const double aggregate_size = settings.aggregate_size >= 0.0 ? settings.aggregate_size : kAggregateCell;
     const double cell = std::max(aggregate_size * radius, 2.0 * report.edge);
     bool coarse_return = aggregate_size > 0.0 && cell <= kAggregateCellLimit * aggregate_size * radius;
-    SurfaceAggregates aggregates;
+    ReturnAggregates aggregates;
     for (int part = 0; part < report.parts; ++part) {
         if (settings.local_return) before = mesh.vertices;
         report.applications += heat_filter(mesh.vertices, 3, adjacency, weights, report.iterations / report.parts, kPositionTolerance,
@@ -528,9 +545,9 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
                 }
             });
             if (coarse_return && part == 0) {
-                aggregates = aggregate_surface(mesh, adjacency, cell, threads);
-                report.aggregates = aggregates.size();
-                coarse_return = aggregates.size() > 0;  // none: the scene spans too many cells for the keys
+                aggregates = return_aggregates(mesh, adjacency, cell, threads);
+                report.aggregates = aggregates.aggregates.size();
+                coarse_return = report.aggregates > 0;  // none: the scene spans too many cells for the keys
             }
             const double tolerance = settings.return_tolerance > 0.0 ? settings.return_tolerance : kReturnTolerance;
             if (settings.grid_return && grid_average(mesh.vertices, areas, weights, offset, local_scale, threads)) {

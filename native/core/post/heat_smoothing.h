@@ -107,7 +107,7 @@ struct HeatSmoothingReport {
     double iterations = 0.0;          // equivalent explicit iterations N
     int parts = 0;
     int applications = 0;             // operator applications (position flow and returned displacement)
-    int coarse_applications = 0;      // applications on the aggregates (two-level)
+    int coarse_applications = 0;      // applications on the aggregates (the return's low-pass up to c ~ 0.9)
     std::size_t aggregates = 0;       // their number
     double coarse_edge = 0.0;         // their RMS coupled distance
     SmoothedNormals normals;          // the final correction's smoothed normals (empty without it): output-ready
