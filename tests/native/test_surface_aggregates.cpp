@@ -20,10 +20,7 @@ namespace {
 // Two spheres 0.05 apart: cells of 0.5 hold pieces of both near where they almost touch.
 TriMesh two_close_spheres() {
     TriMesh m = make_icosphere(4, 1.0, {0, 0, 0});
-    const TriMesh other = make_icosphere(4, 1.0, {2.05, 0, 0});
-    const int32_t base = static_cast<int32_t>(m.num_vertices());
-    m.vertices.insert(m.vertices.end(), other.vertices.begin(), other.vertices.end());
-    for (int32_t i : other.triangles) m.triangles.push_back(i + base);
+    append(m, make_icosphere(4, 1.0, {2.05, 0, 0}));
     return m;
 }
 
@@ -183,11 +180,9 @@ TEST_CASE("surface aggregates: empty meshes, lone vertices, zero weights and sce
     for (double offset : {1.5e5, 4.0e5}) {
         INFO("offset " << offset);
         TriMesh wide = make_noisy_sphere(4, 1.0, 0.03);
-        const TriMesh far = make_noisy_sphere(4, 1.0, 0.03);
-        const int32_t base = static_cast<int32_t>(wide.num_vertices());
-        for (std::size_t i = 0; i < far.num_vertices(); ++i)
-            add_vertex(wide, {far.vertices[3 * i] + offset, far.vertices[3 * i + 1], far.vertices[3 * i + 2]});
-        for (int32_t i : far.triangles) wide.triangles.push_back(i + base);
+        TriMesh far = wide;
+        for (std::size_t i = 0; i < far.num_vertices(); ++i) far.vertices[3 * i] = static_cast<float>(far.vertices[3 * i] + offset);
+        append(wide, far);
         const MeshAdjacency wide_adjacency = build_adjacency(wide, 2);
         const bool fits = offset < 2.0e5;
         CHECK((aggregate_surface(wide, wide_adjacency, 0.15, 2).size() > 0) == fits);
