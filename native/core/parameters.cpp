@@ -146,20 +146,23 @@ std::vector<ParameterSpec> make_schema() {
     // ---- smoothing (Sec. 3.2, Eq. 3-9) -------------------------------------------------------------------------
     s.push_back(Spec::count("smoothing_iterations", &P::smoothing_iterations, post).group("smoothing")
                     .label("Smoothing Iterations").cli("--mesh-smoothing-iters").soft(0, 100)
-                    .help("How many times the surface is smoothed: removes the bumps of individual particles (0: off)")
+                    .help("Smoothing on or off (0). With Smoothing Reach 0, how many times the surface is smoothed (the "
+                          "paper's iterations: they remove the bumps of individual particles, reaching less far the finer "
+                          "the cubes)")
                     .done());
     s.push_back(Spec::real("smoothing_strength", &P::smoothing_strength, post).group("smoothing")
                     .label("Smoothing Strength").cli("--mesh-smoothing-strength,--mesh-smoothing-beta")
-                    .range(0.0, 1.0, true).depends_on("smoothing_iterations")
-                    .help("How far each smoothing step moves a vertex towards its neighbours (1: all the way)").done());
+                    .range(0.0, 1.0, true).depends_on("smoothing_iterations,!smoothing_reach")
+                    .help("How far each smoothing iteration moves a vertex towards its neighbours (1: all the way; with "
+                          "Smoothing Reach 0 only)").done());
     s.push_back(Spec::real("smoothing_reach", &P::smoothing_reach, post).group("smoothing").label("Smoothing Reach")
                     .cli("--mesh-smoothing-reach").unit("particle radii").range(0.0, 64.0).soft(0.0, 10.0)
                     .depends_on("smoothing_iterations")
-                    .help("Off (0): the paper's smoothing iterations. Otherwise a heat flow that reaches this far instead "
-                          "(4.28: as far as 64 iterations at cube size 0.5), the same at every cube size up to 0.5 and "
-                          "growing with the cube above it as the iterations' reach does; tubes, sheets and drops keep "
-                          "their volume where they are instead of shrinking and being given it back per piece. About "
-                          "3x the iterations' cost").done());
+                    .help("How far smoothing reaches: a heat flow that removes the particles' bumps alike at every cube "
+                          "size up to 0.5 (growing with the cube above it, as coarse cubes need) while tubes, sheets and "
+                          "drops keep their volume where they are (4.28: as far as 64 iterations at cube size 0.5). 0: the "
+                          "paper's iterations instead, about a third of the cost, whose reach shrinks with the cube and "
+                          "whose lost volume is given back per piece").done());
     s.push_back(Spec::flag("smoothing_weights", &P::smoothing_weights, post).group("smoothing").label("Keep Splashes")
                     .cli("--mesh-smoothing-weights").depends_on("smoothing_iterations")
                     .help("Smooth flat water fully but thin splashes and drops less, so they keep their shape (feature "
@@ -175,7 +178,9 @@ std::vector<ParameterSpec> make_schema() {
                     .help("Push the feature weights towards 0 and 1 (the paper's smoothstep, Eq. 9)").done());
     s.push_back(Spec::flag("volume_restoration", &P::volume_restoration, post).group("smoothing").label("Keep Volume")
                     .cli("--mesh-smoothing-volume-restoration").depends_on("smoothing_iterations")
-                    .help("Push the smoothed surface back out so that smoothing does not shrink the water").done());
+                    .help("Give each piece of water the volume smoothing took: with the reach a final correction of "
+                          "about a hundredth of a particle radius, with the iterations a push back out along the normals")
+                    .done());
 
     // ---- normals (Sec. 3.4) -----------------------------------------------------------------------------------
     s.push_back(Spec::flag("normals", &P::normals, post).group("normals").label("Normals").cli("--normals")

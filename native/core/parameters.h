@@ -36,7 +36,7 @@ struct PostprocessParams {
     double stray_min_volume = 0.0;             // pieces enclosing less (in particle volumes) are removed; 0: off
     int smoothing_iterations = 25;             // weighted Laplacian iterations (Eq. 3-5)
     double smoothing_strength = 1.0;           // explicit step scale (the paper's beta)
-    double smoothing_reach = 0.0;              // > 0: heat flow of this reach in r instead (post/heat_smoothing.h)
+    double smoothing_reach = 4.28;             // heat flow of this reach in r (post/heat_smoothing.h, kMeasuredReach); 0: the iterations
     bool smoothing_weights = true;             // feature weights (Sec. 3.2); off: uniform smoothing
     double weights_normalization = 0.0;        // N_HS; 0: automatic
     bool weights_smoothstep = true;            // Eq. 9
@@ -99,7 +99,9 @@ struct ParameterSpec {
     double suggested = 0.0;           // a reasonable value to offer where the default is automatic (UIs)
     double soft_minimum = 0.0, soft_maximum = 0.0;  // the usual range, for sliders
     bool required = false;            // no default: the caller must give it
-    std::string depends_on;           // the flag or count that must be on (non-zero) for this one to matter
+    // When this one matters: comma-separated conditions, all of which must hold; "name" a flag or number that must be
+    // on (non-zero), "!name" one that must be off (zero): "smoothing_iterations,!smoothing_reach".
+    std::string depends_on;
 
     std::function<double(const Parameters&)> get;
     std::function<void(Parameters&, double)> set;

@@ -33,7 +33,7 @@ class Parameter:
     soft_minimum: float
     soft_maximum: float
     required: bool
-    depends_on: str           # a flag or count that must be on for this parameter to matter
+    depends_on: str           # when it matters: "a,!b" = a on (non-zero) and b off (zero); see depends_on_conditions
     allowed: str              # the allowed values in words
 
     @property
@@ -48,6 +48,15 @@ class Parameter:
         if self.type == "flag":
             return _core.parameter_problem(self.name, bool(value))
         return _core.parameter_problem(self.name, float(value))
+
+    @property
+    def depends_on_conditions(self) -> Tuple[Tuple[str, bool], ...]:
+        """(name, must be on) for each condition of depends_on: ("smoothing_iterations", True), ("smoothing_reach", False)."""
+        return tuple((c.lstrip("!"), not c.startswith("!")) for c in self.depends_on.split(",") if c)
+
+    def matters(self, is_on) -> bool:
+        """Whether this parameter has an effect, given is_on(name): whether that parameter is on (non-zero)."""
+        return all(bool(is_on(name)) == on for name, on in self.depends_on_conditions)
 
     def describe(self) -> str:
         """One line of documentation: meaning, unit, allowed values and default."""
@@ -84,7 +93,7 @@ GROUPS: Tuple[str, ...] = tuple(dict.fromkeys(p.group for p in PARAMETERS))
 
 
 def defaults() -> Dict[str, object]:
-    """Every parameter that has a default, at its default (the paper's pipeline)."""
+    """Every parameter that has a default, at its default (the paper's pipeline, smoothed to a physical reach)."""
     return {p.name: p.python_default for p in PARAMETERS if not p.required}
 
 

@@ -95,14 +95,17 @@ def test_settings_of_older_files_are_converted():
     check(not old.memory_budget_auto and abs(old.memory_budget - 2.0) < 1e-9, (old.memory_budget_auto, old.memory_budget))
     check(not old.threads_auto and old.threads == 3, (old.threads_auto, old.threads))
     check("use_feature_weights" not in old.keys() and old.settings_version == properties.SETTINGS_VERSION, old.keys())
+    check(old.smoothing_reach == 0.0, "a file from before the reach's default keeps the iterations it was made with")
     check(not properties.migrate_settings(old), "a converted object must not be converted again")
     bpy.data.objects.remove(legacy)
 
 
 def test_each_parameter_edit_reaches_the_core():
     scene.frame_set(30)
+    check(abs(settings.smoothing_reach - schema.BY_NAME["smoothing_reach"].default) < 1e-6, "a new surface gets the reach")
+    settings.smoothing_reach = 0.0  # the iterations, whose count, strength and restoration then matter too
     baseline = mesh_update.read_vertices(surface.data).copy()
-    changes = [("smoothing_length", 2.4), ("iso_threshold", 0.5), ("smoothing_iterations", 4),
+    changes = [("smoothing_length", 2.4), ("iso_threshold", 0.5), ("smoothing_iterations", 4), ("smoothing_reach", 3.0),
                ("smoothing_strength", 0.5), ("smoothing_weights", False), ("volume_restoration", False),
                ("decimate_barnacles", False), ("mesh_cleanup", True), ("normal_smoothing_iterations", 3),
                ("sph_normals", True)]
@@ -128,6 +131,7 @@ def test_each_parameter_edit_reaches_the_core():
     check(not settings.status_is_error and not np.array_equal(mesh_update.read_vertices(surface.data), baseline),
           "a fixed weights normalisation should change the surface")
     settings.weights_normalization_auto = True
+    settings.smoothing_reach = schema.BY_NAME["smoothing_reach"].default
 
 
 def test_quads_and_stray_removal_reach_the_mesh():

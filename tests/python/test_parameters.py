@@ -1,5 +1,5 @@
 """One parameter schema for every interface: the Python API's signature and checks, the command line's flags and
-the README's list all come from native/core/parameters.cpp, with the same defaults (the paper's pipeline)."""
+the README's list all come from native/core/parameters.cpp, with the same defaults (the paper's pipeline, smoothed to a physical reach)."""
 import inspect
 import pathlib
 import re
@@ -29,8 +29,8 @@ def test_schema_is_complete_and_consistent():
             continue
         if p.automatic is not None:
             assert p.problem(p.automatic) is None and p.problem(p.suggested) is None, p.name
-        if p.depends_on:
-            assert parameters.BY_NAME[p.depends_on].type in ("flag", "count"), p.name
+        for name, _ in p.depends_on_conditions:
+            assert parameters.BY_NAME[name].type in ("flag", "count", "real") and name != p.name, p.name
 
 
 def test_reconstruct_signature_is_the_schema():
@@ -44,9 +44,22 @@ def test_reconstruct_signature_is_the_schema():
         assert f"  {p.name}: {p.help}" in meniscus.reconstruct.__doc__
 
 
-def test_default_reconstruction_is_the_papers_pipeline(shared):
+def test_a_dependent_parameter_matters_only_while_its_conditions_hold():
+    strength = parameters.BY_NAME["smoothing_strength"]
+    assert strength.depends_on_conditions == (("smoothing_iterations", True), ("smoothing_reach", False))
+    values = parameters.defaults()
+    assert not strength.matters(values.get)  # the reach is the default: the iterations' step does not apply
+    values["smoothing_reach"] = 0.0
+    assert strength.matters(values.get)
+    values["smoothing_iterations"] = 0
+    assert not strength.matters(values.get)
+    assert parameters.BY_NAME["smoothing_length"].matters(lambda name: False)  # no conditions: always
+
+
+def test_default_reconstruction_is_the_papers_pipeline_with_the_reach(shared):
     positions = meniscus.read_particles(shared / DAM_BREAK).positions
     mesh = meniscus.reconstruct(positions, 0.025)  # nothing but the radius: what the CLI and the add-on do too
+    assert mesh.stats["counts"]["smoothing_reach"] == parameters.BY_NAME["smoothing_reach"].default == 4.28
     for stage in ("decimation", "weights", "smoothing", "normals"):
         assert stage in mesh.stats["seconds"], stage
     assert "decimated_configurations" in mesh.stats["counts"]

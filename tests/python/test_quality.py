@@ -1,7 +1,7 @@
 """The paper's post-processing, measured on every shared SPlisHSPlasH frame (issue 3's bounds).
 
-Parameters: r = 0.025, l = 2, c = 0.5, 25 smoothing iterations, weights on, decimation on, 10 normal-smoothing
-iterations. Each bound can fail: the raw mesh is the reference for volume and bumpiness.
+Parameters: r = 0.025, l = 2, c = 0.5, the default smoothing (the reach of 4.28 r; the tests about the paper's 25
+iterations say smoothing_reach 0), weights on, decimation on, 10 normal-smoothing iterations. Each bound can fail: the raw mesh is the reference for volume and bumpiness.
 """
 import numpy as np
 import pytest
@@ -71,8 +71,9 @@ def test_no_barnacle_configuration_left(frame):
 
 def test_weights_matter_uniform_smoothing_shrinks_droplets(shared):
     positions = meniscus.read_particles(shared / "splashsurf/double_dam_break_frame_26_4732_particles.vtk").positions
-    ours = reconstruct(positions)
-    plain = reconstruct(positions, smoothing_weights=False, volume_restoration=False)
+    # The paper's iterations (smoothing_reach 0): the reach returns a drop's shrinkage even without weights.
+    ours = reconstruct(positions, smoothing_reach=0.0)
+    plain = reconstruct(positions, smoothing_weights=False, volume_restoration=False, smoothing_reach=0.0)
     raw = meniscus.assess_quality(ours.raw)
     largest = raw["components"][0][1]
     before = np.array(sorted(droplets(raw, largest)))
@@ -87,7 +88,7 @@ def test_weights_matter_uniform_smoothing_shrinks_droplets(shared):
 def test_weights_without_restoration_already_keep_droplets(shared):
     """The weights alone (as published) protect droplets; the restoration is for thin bulk features."""
     positions = meniscus.read_particles(shared / "splashsurf/double_dam_break_frame_26_4732_particles.vtk").positions
-    mesh = reconstruct(positions, volume_restoration=False)
+    mesh = reconstruct(positions, volume_restoration=False, smoothing_reach=0.0)
     q, raw = meniscus.assess_quality(mesh), meniscus.assess_quality(mesh.raw)
     largest = raw["components"][0][1]
     before, after = np.array(sorted(droplets(raw, largest))), np.array(sorted(droplets(q, largest)))
@@ -95,10 +96,11 @@ def test_weights_without_restoration_already_keep_droplets(shared):
 
 
 def test_thin_tubes_need_the_restoration(shared):
-    """hilbert2's tubes are three particles across: flat-surface weights smooth them like a flat surface."""
+    """hilbert2's tubes are three particles across: the paper's iterations (smoothing_reach 0) with flat-surface
+    weights smooth them like a flat surface (the reach returns their shrinkage where it happens, test_smoothing.py)."""
     positions = meniscus.read_particles(shared / "splashsurf/hilbert2_7954_particles.vtk").positions
-    without = reconstruct(positions, volume_restoration=False)
-    with_restoration = reconstruct(positions)
+    without = reconstruct(positions, volume_restoration=False, smoothing_reach=0.0)
+    with_restoration = reconstruct(positions, smoothing_reach=0.0)
     raw_volume = meniscus.assess_quality(without.raw)["volume"]
     assert meniscus.assess_quality(without)["volume"] / raw_volume < 0.8
     assert abs(meniscus.assess_quality(with_restoration)["volume"] / raw_volume - 1.0) < 0.03

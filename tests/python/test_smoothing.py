@@ -1,7 +1,7 @@
-"""The smoothing of a physical reach (issue 12, post/heat_smoothing.h; opt-in: smoothing_reach > 0) on the shared
-frames: the targets it meets, asserted on a few frames (bench/smoothing_scale.py measures the whole table), and its
-interfaces: the reach's meaning, the paper's iterations by default, hfL in the quality report and `meniscus inspect`,
-walls, threads.
+"""The smoothing of a physical reach (issue 12, post/heat_smoothing.h; the default, smoothing_reach 0: the paper's
+iterations) on the shared frames: the targets it meets, asserted on a few frames (bench/smoothing_scale.py measures
+the whole table), and its interfaces: the reach's meaning and default, hfL in the quality report and `meniscus
+inspect`, walls, threads.
 """
 import json
 import subprocess
@@ -54,7 +54,7 @@ def test_thin_tubes_keep_their_volume_where_they_are(hilbert2):
         assert q["check"]["ok"]
         full = meniscus.reconstruct(hilbert2, R, cube_size=cube, keep_raw_mesh=True, smoothing_reach=REACH)
         assert abs(meniscus.assess_quality(full, raw=full.raw)["volume_ratio"] - 1) < (0.02 if cube > 0.5 else 0.01), cube
-    explicit = meniscus.reconstruct(hilbert2, R, cube_size=1.0, keep_raw_mesh=True)  # the default
+    explicit = meniscus.reconstruct(hilbert2, R, cube_size=1.0, keep_raw_mesh=True, smoothing_reach=0.0)  # iterations
     assert meniscus.assess_quality(explicit, raw=explicit.raw)["volume_ratio"] > 1.1  # what it replaces
 
 
@@ -79,9 +79,13 @@ def test_flat_water_is_smoothed_at_every_cube_size():
         assert mesh.stats["counts"]["smoothing_reach"] == pytest.approx(REACH * max(cube / 0.5, 1)), cube
 
 
-def test_the_reach_is_opt_in_and_set_in_particle_radii(hilbert2, tmp_path, cli):
+def test_the_reach_is_the_default_and_set_in_particle_radii(hilbert2, tmp_path, cli):
     default = meniscus.reconstruct(hilbert2, R, cube_size=1.0)
-    assert "smoothing_reach" not in default.stats["counts"]  # the paper's iterations
+    assert default.stats["counts"]["smoothing_reach"] == pytest.approx(2 * REACH)  # 4.28 r, grown with the cube
+    assert "volume restoration" not in default.stats["seconds"]  # the reach keeps each piece's volume itself
+    iterations = meniscus.reconstruct(hilbert2, R, cube_size=1.0, smoothing_reach=0.0)
+    assert "smoothing_reach" not in iterations.stats["counts"] and "volume restoration" in iterations.stats["seconds"]
+    assert not np.array_equal(iterations.vertices, default.vertices)
     a = meniscus.reconstruct(hilbert2, R, cube_size=1.0, smoothing_reach=3.0)
     assert a.stats["counts"]["smoothing_reach"] == pytest.approx(6.0)  # coarser than 0.5: grows with the cube
     fine = meniscus.reconstruct(hilbert2, R, cube_size=0.25, smoothing_reach=3.0)

@@ -130,7 +130,7 @@ class MENISCUS_PT_cache(_SurfacePanel, bpy.types.Panel):
 
 
 def _is_on(settings, name):
-    """Whether a flag or count parameter is on (non-zero): a dependent parameter only matters then."""
+    """Whether a parameter is on (non-zero): a dependent parameter only matters then (or only while it is off)."""
     if name == "normals":
         return settings.use_custom_normals
     return bool(getattr(settings, name))
@@ -143,7 +143,7 @@ def draw_parameters(layout, settings, group):
         if parameter.group != group or parameter.name in properties.DRIVEN_BY_ADDON or parameter.type == "vector3":
             continue
         column = layout.column(align=True)
-        column.active = not parameter.depends_on or _is_on(settings, parameter.depends_on)
+        column.active = parameter.matters(lambda name: _is_on(settings, name))
         if parameter.automatic is not None:
             # [Neighbour Count 5.00][Auto]: the value greys out while the switch is on.
             row = column.row(align=True)

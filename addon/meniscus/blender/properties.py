@@ -15,7 +15,7 @@ from .. import cache, parameters, sequence
 from . import container
 
 # The layout of the settings, stored in each surface; files saved before the schema (0) are converted on load.
-SETTINGS_VERSION = 2
+SETTINGS_VERSION = 3
 # Pipeline parameters the add-on sets itself: normals follow "Custom Normals", cube_size has a viewport and a
 # render value (`cube_size` and `render_cube_size`, the names .blend files already have).
 DRIVEN_BY_ADDON = {"normals", "cube_size"}
@@ -325,6 +325,9 @@ def migrate_settings(settings):
             settings.memory_budget = megabytes / 1024.0
     if "threads" in settings and int(settings["threads"]) > 0:
         settings.threads_auto = False
+    if settings.get("settings_version", 0) < 3 and "smoothing_reach" not in settings:
+        # Before version 3 the reach was off by default: a file that never set it keeps the iterations it was made with.
+        settings.smoothing_reach = 0.0
     for old in ("use_feature_weights", "use_snap_distance", "memory_budget_mb"):
         if old in settings:
             del settings[old]

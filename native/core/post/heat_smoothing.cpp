@@ -10,6 +10,7 @@
 #include "base/parallel.h"
 #include "mesh/adjacency.h"
 #include "mesh/components.h"
+#include "post/container.h"
 #include "post/normals.h"
 #include "post/surface_aggregates.h"
 #include "post/volume.h"
@@ -494,7 +495,11 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     }
     const WallConstraints* walls = settings.walls && !settings.walls->empty() ? settings.walls : nullptr;
     std::vector<uint8_t> frozen;
+    // Capped, the flow smooths the contact line along itself, as the iterations do (post/container.h): the cap below
+    // it would otherwise pull it down the wall.
+    MeshAdjacency along_walls;
     if (walls) {
+        along_walls.vertex_neighbours = smoothing_neighbours_at_walls(*walls, adjacency.vertex_neighbours);
         if (walls->mask.size() != mesh.num_vertices()) throw InputError("heat_smooth: the wall mask does not belong to this mesh");
         frozen.resize(walls->mask.size());
         for (std::size_t v = 0; v < frozen.size(); ++v) {
@@ -529,8 +534,8 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     ReturnAggregates aggregates;
     for (int part = 0; part < report.parts; ++part) {
         if (settings.local_return) before = mesh.vertices;
-        report.applications += heat_filter(mesh.vertices, 3, adjacency, weights, report.iterations / report.parts, kPositionTolerance,
-                                           threads, walls ? &frozen : nullptr);
+        report.applications += heat_filter(mesh.vertices, 3, walls ? along_walls : adjacency, weights, report.iterations / report.parts,
+                                           kPositionTolerance, threads, walls ? &frozen : nullptr);
         apply_walls(walls, mesh);
         report.seconds_flow += seconds_since(mark);
         if (!settings.local_return) continue;
