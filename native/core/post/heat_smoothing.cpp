@@ -499,8 +499,8 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     // it would otherwise pull it down the wall.
     MeshAdjacency along_walls;
     if (walls) {
-        along_walls.vertex_neighbours = smoothing_neighbours_at_walls(*walls, adjacency.vertex_neighbours);
         if (walls->mask.size() != mesh.num_vertices()) throw InputError("heat_smooth: the wall mask does not belong to this mesh");
+        along_walls.vertex_neighbours = smoothing_neighbours_at_walls(*walls, adjacency.vertex_neighbours);
         frozen.resize(walls->mask.size());
         for (std::size_t v = 0; v < frozen.size(); ++v) {
             uint8_t bits = 0;
