@@ -74,7 +74,7 @@ void chebyshev_term(bool accumulate, const CsrList& nb, const float* w, const ui
 
 template <int D, bool FROZEN>
 int chebyshev_apply(std::vector<float>& x, const CsrList& nb, const float* w, const uint8_t* frozen, const std::vector<double>& c,
-                    int threads) {
+                    int threads, HeatFilterWorkspace& workspace) {
     const int64_t nv = static_cast<int64_t>(nb.rows());
     const int degree = static_cast<int>(c.size()) - 1;
     // Positions relative to the centre of their bounding box (small numbers wherever the mesh lies); the result is a
@@ -88,7 +88,11 @@ int chebyshev_apply(std::vector<float>& x, const CsrList& nb, const float* w, co
             for (int d = 0; d < D; ++d) lo[d] = std::min(lo[d], x[D * i + d]), hi[d] = std::max(hi[d], x[D * i + d]);
         for (int d = 0; d < D; ++d) centre[d] = 0.5f * lo[d] + 0.5f * hi[d];
     }
-    std::vector<float> older(x.size()), current(x.size()), acc(x.size());
+    // Every element of the three is written before it is read: resizing a reused buffer needs no clearing.
+    std::vector<float>& older = workspace.older;
+    std::vector<float>& current = workspace.current;
+    std::vector<float>& acc = workspace.sum;
+    older.resize(x.size()), current.resize(x.size()), acc.resize(x.size());
     const float c0 = static_cast<float>(c[0]);
     parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t i = begin; i < end; ++i)
@@ -357,7 +361,7 @@ ReturnAggregates return_aggregates(const TriMesh& mesh, const MeshAdjacency& adj
 // digit, with a third of the applications.
 int aggregate_low_pass(std::vector<float>& value, const TriMesh& mesh, const MeshAdjacency& adjacency, const ReturnAggregates& coarse_surface,
                        const std::vector<float>& areas, double cell, double reach, double tolerance, double edge, int threads,
-                       HeatSmoothingReport& report) {
+                       HeatSmoothingReport& report, HeatFilterWorkspace& workspace) {
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
     const SurfaceAggregates& aggregates = coarse_surface.aggregates;
     std::vector<double> coarse = restrict_to_aggregates(aggregates, coarse_surface.valence, value.data(), 1, threads);
@@ -401,7 +405,7 @@ int aggregate_low_pass(std::vector<float>& value, const TriMesh& mesh, const Mes
             value[i] = static_cast<float>(total > 0.0 ? sum / total : coarse[own]);
         }
     });
-    return heat_filter(value, 1, adjacency, {}, std::pow(0.5 * cell / edge, 2.0), tolerance, threads);
+    return heat_filter(value, 1, adjacency, {}, std::pow(0.5 * cell / edge, 2.0), tolerance, threads, nullptr, &workspace);
 }
 
 }  // namespace
@@ -460,7 +464,7 @@ std::vector<double> heat_coefficients(double n, double tolerance) {
 }
 
 int heat_filter(std::vector<float>& x, int dims, const MeshAdjacency& adjacency, const std::vector<float>& weights, double n,
-                double tolerance, int threads, const std::vector<uint8_t>* frozen) {
+                double tolerance, int threads, const std::vector<uint8_t>* frozen, HeatFilterWorkspace* workspace) {
     const CsrList& nb = adjacency.vertex_neighbours;
     const std::size_t nv = nb.rows();
     if (dims != 1 && dims != 3) throw InputError("heat_filter: 1 or 3 values per vertex");
@@ -471,8 +475,11 @@ int heat_filter(std::vector<float>& x, int dims, const MeshAdjacency& adjacency,
     if (c.size() < 2 || nv == 0) return 0;
     const float* w = weights.empty() ? nullptr : weights.data();
     const uint8_t* f = frozen && !frozen->empty() ? frozen->data() : nullptr;
-    if (dims == 3) return f ? chebyshev_apply<3, true>(x, nb, w, f, c, threads) : chebyshev_apply<3, false>(x, nb, w, nullptr, c, threads);
-    return f ? chebyshev_apply<1, true>(x, nb, w, f, c, threads) : chebyshev_apply<1, false>(x, nb, w, nullptr, c, threads);
+    HeatFilterWorkspace local;
+    HeatFilterWorkspace& buffers = workspace ? *workspace : local;
+    if (dims == 3)
+        return f ? chebyshev_apply<3, true>(x, nb, w, f, c, threads, buffers) : chebyshev_apply<3, false>(x, nb, w, nullptr, c, threads, buffers);
+    return f ? chebyshev_apply<1, true>(x, nb, w, f, c, threads, buffers) : chebyshev_apply<1, false>(x, nb, w, nullptr, c, threads, buffers);
 }
 
 HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& weights_in,
@@ -532,10 +539,11 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     const double cell = std::max(aggregate_size * radius, 2.0 * report.edge);
     bool coarse_return = aggregate_size > 0.0 && cell <= kAggregateCellLimit * aggregate_size * radius;
     ReturnAggregates aggregates;
+    HeatFilterWorkspace workspace;  // shared by every filter below
     for (int part = 0; part < report.parts; ++part) {
         if (settings.local_return) before = mesh.vertices;
         report.applications += heat_filter(mesh.vertices, 3, walls ? along_walls : adjacency, weights, report.iterations / report.parts,
-                                           kPositionTolerance, threads, walls ? &frozen : nullptr);
+                                           kPositionTolerance, threads, walls ? &frozen : nullptr, &workspace);
         apply_walls(walls, mesh);
         report.seconds_flow += seconds_since(mark);
         if (!settings.local_return) continue;
@@ -559,9 +567,10 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
                 // the research variant, when asked for and the grid fits
             } else if (coarse_return) {
                 report.applications +=
-                    aggregate_low_pass(offset, mesh, adjacency, aggregates, areas, cell, local_scale, tolerance, report.edge, threads, report);
+                    aggregate_low_pass(offset, mesh, adjacency, aggregates, areas, cell, local_scale, tolerance, report.edge, threads, report,
+                                       workspace);
             } else {
-                report.applications += heat_filter(offset, 1, adjacency, {}, return_iterations, tolerance, threads);
+                report.applications += heat_filter(offset, 1, adjacency, {}, return_iterations, tolerance, threads, nullptr, &workspace);
             }
         }
         parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
