@@ -584,6 +584,8 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
         report.seconds_return += seconds_since(mark);
     }
 
+    workspace = HeatFilterWorkspace{};  // its ~90 MB per million vertices are not needed by the correction
+    before = std::vector<float>();
     if (settings.volume_correction) {
         // Along smoothed normals (offsets along raw vertex normals would print the triangulation's noise back in);
         // the offsets are tiny, so these normals are the output's normals too.
