@@ -20,8 +20,9 @@ Measures (analysis/scale_metrics.h; all ratios against each tool's own raw march
   temporal second differences of the height and of its gradient (central differences) where the surface exists in the
   three frames and did not jump by more than 2 r; medians over frames 10-60; N_HS per frame.
 
-Variants of ours: "today" (the pipeline's default: the paper's 25 explicit iterations with per-component volume
-restoration), "reach" (the opt-in heat flow, smoothing_reach=4.28: the setting measured in README) or a JSON object of heat_smooth settings (reach in r, parts,
+Variants of ours: "today" (smoothing_reach=0: the paper's 25 explicit iterations with per-component volume
+restoration, the default before issue 12), "reach" (the heat flow, smoothing_reach=4.28: the default since issue 12)
+or a JSON object of heat_smooth settings (reach in r, parts,
 local_return, volume_correction, grid_return) applied to the pipeline's unsmoothed, decimated mesh and its weights,
 e.g. '{"reach": 4, "parts": 1}'.
 """
@@ -99,8 +100,8 @@ def run_ours(positions, cube, variant="reach", keep_raw=True, threads=0):
     """dict(vertices, triangles, raw_vertices, raw_triangles, seconds, smoothing_seconds, stage_seconds, nhs, counts)."""
     common = dict(particle_radius=R, smoothing_length=SMOOTHING_LENGTH, cube_size=cube, iso_threshold=ISO, threads=threads,
                   keep_raw_mesh=keep_raw)
-    if variant in ("reach", "today", "default"):  # default: today's pipeline
-        kwargs = dict(smoothing_reach=REACH) if variant == "reach" else {}
+    if variant in ("reach", "today", "default"):  # "today"/"default": the paper's iterations, the default before the reach
+        kwargs = dict(smoothing_reach=REACH if variant == "reach" else 0.0)
         start = time.perf_counter()
         mesh = meniscus.reconstruct(positions, **common, **kwargs)
         seconds = time.perf_counter() - start
@@ -293,7 +294,7 @@ def _f(x, spec=".3f"):
 def summary(args):
     folder = args.folder or RESULTS
     rows = json.loads((folder / "table.json").read_text())
-    label = {("meniscus", "reach"): "ours, reach 4.28 r", ("meniscus", "today"): "ours default (25 explicit)", ("pysplashsurf", "default"): "pysplashsurf"}
+    label = {("meniscus", "reach"): "ours, reach 4.28 r", ("meniscus", "today"): "ours, reach 0 (25 explicit)", ("pysplashsurf", "default"): "pysplashsurf"}
     lines = ["## Per frame", "",
              "| frame | c | tool | volume | droplets min | hfL | hfL abs (r) | heat | hf | smoothing s | share | ok |",
              "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
