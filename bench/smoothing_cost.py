@@ -15,7 +15,7 @@ import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 VARIANTS = {
-    "default (25 explicit iterations + restoration)": {},
+    "25 explicit iterations + restoration (smoothing_reach 0)": dict(smoothing_reach=0.0),
     "reach 4.28 r (2 parts)": dict(smoothing_reach=4.28),
     "reach 2.68 r (1 part)": dict(smoothing_reach=2.68),
     "no smoothing": dict(smoothing_iterations=0),
