@@ -25,7 +25,7 @@ meniscus, mesh_update = render_scene.library(args.addon_path)
 out = pathlib.Path(args.output)
 out.mkdir(parents=True, exist_ok=True)
 particles = meniscus.read_particles(args.frame)
-smoothed = meniscus.reconstruct(particles.positions, 0.025, cube_size=0.5, decimate_barnacles=True, smoothing_iterations=25,
+smoothed = meniscus.reconstruct(particles.positions, 0.025, cube_size=0.5, decimate_barnacles=True,  # the default smoothing
                                 normal_smoothing_iterations=10, output_weights=True, keep_raw_mesh=True)
 raw = smoothed.raw
 RAW = dict(decimate_barnacles=False, smoothing_iterations=0, normal_smoothing_iterations=0)  # marching cubes alone
