@@ -264,8 +264,8 @@ def write_report(json_paths, output=RESULTS):
         f"{len(records[0]['settings']['custom_normals_on']['frames'])} frame changes** after one warm-up change, "
         f"each to another file. Input: {FRAMES} jittered copies of `pentagonal_hexecontahedron_32286_particles.bgeo` "
         f"with a `velocity` attribute (legacy VTK, cached in `build/bench/blender_frame_change/`), the add-on's "
-        f"default pipeline (r = {RADIUS}, l = 2, t = 0.6, barnacle decimation, 25 weighted smoothing iterations, "
-        f"volume restoration, 10 normal-smoothing iterations, all threads) at viewport = render cube size "
+        f"default pipeline (r = {RADIUS}, l = 2, t = 0.6, barnacle decimation, the smoothing of a "
+        f"4.28 r reach with its volume correction, 10 normal-smoothing iterations, all threads) at viewport = render cube size "
         f"**{CUBE_SIZE}**. 2 cores (load averages in the JSON; the run itself keeps both busy).", "",
         "*core* = `meniscus.api.reconstruct` (the C++ core and its pybind11 call), *read* = "
         "`meniscus.api.read_particles`, both timed inside the frame change; *Blender* = total − core − read "
