@@ -23,7 +23,7 @@ Measures (analysis/scale_metrics.h; all ratios against each tool's own raw march
 Variants of ours: "today" (smoothing_reach=0: the paper's 25 explicit iterations with per-component volume
 restoration, the default before issue 12), "reach" (the heat flow, smoothing_reach=4.28: the default since issue 12)
 or a JSON object of heat_smooth settings (reach in r, parts,
-local_return, volume_correction, grid_return) applied to the pipeline's unsmoothed, decimated mesh and its weights,
+local_return, volume_correction, local_scale, return_tolerance, aggregate_size) applied to the pipeline's unsmoothed, decimated mesh and its weights,
 e.g. '{"reach": 4, "parts": 1}'.
 """
 import argparse

@@ -208,120 +208,6 @@ void normals_and_areas(const TriMesh& mesh, const MeshAdjacency& adjacency, std:
     });
 }
 
-// Weighted Gaussian average of a per-vertex scalar over space: value_i <- w_i (G * (A w v))(x_i) / (G * (A w))(x_i)
-// (A the vertex area, w the smoothing weight: what the moving vertices lost goes back to the moving vertices, in
-// proportion to how much they move; a droplet of weight 0 beside the pool neither gives nor takes), G of
-// variance sigma^2 / 2 per axis (the heat time sigma^2 / 4 of the graph filter it replaces). Splatted trilinearly to a
-// node grid of spacing sigma / 3, blurred separably there, interpolated back: a few passes over the vertices instead
-// of ~30 graph applications. Deterministic: vertices are bucketed by z layer in index order and the layers splat in
-// two phases (even, odd), so each node's sum has a fixed order. Returns false, changing nothing, when the grid would
-// be much larger than the mesh (a sparse scene): the caller then uses the graph filter.
-bool grid_average(const std::vector<float>& positions, const std::vector<float>& areas, const std::vector<float>& weights,
-                  std::vector<float>& value, double sigma, int threads) {
-    const int64_t nv = static_cast<int64_t>(value.size());
-    if (nv == 0 || !(sigma > 0.0)) return false;
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int64_t i = 0; i < nv; ++i)
-        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], double(positions[3 * i + k])), hi[k] = std::max(hi[k], double(positions[3 * i + k]));
-    const double h = sigma / 3.0;
-    int64_t n[3];
-    for (int k = 0; k < 3; ++k) n[k] = static_cast<int64_t>(std::floor((hi[k] - lo[k]) / h)) + 2;
-    const int64_t nodes = n[0] * n[1] * n[2];
-    if (!(nodes > 0) || nodes > std::max<int64_t>(int64_t(1) << 21, 2 * nv)) return false;
-    // Per vertex: base node and fractions.
-    std::vector<int32_t> base(3 * static_cast<std::size_t>(nv));
-    std::vector<float> frac(3 * static_cast<std::size_t>(nv));
-    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t i = begin; i < end; ++i)
-            for (int k = 0; k < 3; ++k) {
-                const double u = (double(positions[3 * i + k]) - lo[k]) / h;
-                const int64_t c = std::min<int64_t>(std::max<int64_t>(static_cast<int64_t>(std::floor(u)), 0), n[k] - 2);
-                base[3 * i + k] = static_cast<int32_t>(c);
-                frac[3 * i + k] = static_cast<float>(std::min(std::max(u - double(c), 0.0), 1.0));
-            }
-    });
-    // Bucket by z layer, in vertex order.
-    std::vector<int64_t> layer_start(static_cast<std::size_t>(n[2]) + 1, 0);
-    for (int64_t i = 0; i < nv; ++i) ++layer_start[base[3 * i + 2] + 1];
-    for (int64_t z = 0; z < n[2]; ++z) layer_start[z + 1] += layer_start[z];
-    std::vector<int32_t> order(static_cast<std::size_t>(nv));
-    {
-        std::vector<int64_t> fill(layer_start.begin(), layer_start.end() - 1);
-        for (int64_t i = 0; i < nv; ++i) order[fill[base[3 * i + 2]]++] = static_cast<int32_t>(i);
-    }
-    auto node = [&](int64_t x, int64_t y, int64_t z) { return (z * n[1] + y) * n[0] + x; };
-    std::vector<double> num(static_cast<std::size_t>(nodes), 0.0), den(static_cast<std::size_t>(nodes), 0.0);
-    for (int phase = 0; phase < 2; ++phase) {
-        const int64_t layers = (n[2] - 1 - phase + 1) / 2;
-        parallel_for(layers, threads, [&](int64_t l) {
-            const int64_t z = 2 * l + phase;
-            for (int64_t o = layer_start[z]; o < layer_start[z + 1]; ++o) {
-                const int64_t i = order[o];
-                const int64_t bx = base[3 * i], by = base[3 * i + 1], bz = base[3 * i + 2];
-                const double fx = frac[3 * i], fy = frac[3 * i + 1], fz = frac[3 * i + 2];
-                const double a = double(areas[i]) * (weights.empty() ? 1.0 : double(weights[i])), av = a * double(value[i]);
-                for (int dz = 0; dz < 2; ++dz)
-                    for (int dy = 0; dy < 2; ++dy)
-                        for (int dx = 0; dx < 2; ++dx) {
-                            const double wgt = (dx ? fx : 1.0 - fx) * (dy ? fy : 1.0 - fy) * (dz ? fz : 1.0 - fz);
-                            const int64_t g = node(bx + dx, by + dy, bz + dz);
-                            num[g] += wgt * av;
-                            den[g] += wgt * a;
-                        }
-            }
-        });
-    }
-    // Separable Gaussian: the trilinear splat and gather add a variance of h^2 / 6 each per axis.
-    const double variance = std::max(0.5 * sigma * sigma - h * h / 3.0, 0.25 * h * h) / (h * h);
-    const int radius = static_cast<int>(std::ceil(3.0 * std::sqrt(variance)));
-    std::vector<double> kernel(2 * static_cast<std::size_t>(radius) + 1);
-    double total = 0.0;
-    for (int k = -radius; k <= radius; ++k) total += kernel[k + radius] = std::exp(-0.5 * k * k / variance);
-    for (double& k : kernel) k /= total;
-    std::vector<double> scratch(static_cast<std::size_t>(nodes));
-    for (int axis = 0; axis < 3; ++axis) {
-        const int64_t stride = axis == 0 ? 1 : (axis == 1 ? n[0] : n[0] * n[1]);
-        const int64_t length = n[axis];
-        const int64_t lines = nodes / length;
-        for (std::vector<double>* field : {&num, &den}) {
-            const double* in = field->data();
-            double* out = scratch.data();
-            parallel_for(lines, threads, [&](int64_t line) {
-                // The line's first node: line enumerates the other two axes.
-                int64_t first;
-                if (axis == 0) first = line * n[0];
-                else if (axis == 1) first = (line / n[0]) * n[0] * n[1] + line % n[0];
-                else first = line;
-                for (int64_t i = 0; i < length; ++i) {
-                    double s = 0.0;
-                    const int64_t from = std::max<int64_t>(-radius, -i), to = std::min<int64_t>(radius, length - 1 - i);
-                    for (int64_t k = from; k <= to; ++k) s += kernel[k + radius] * in[first + (i + k) * stride];
-                    out[first + i * stride] = s;
-                }
-            }, 64);
-            field->swap(scratch);
-        }
-    }
-    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t i = begin; i < end; ++i) {
-            const int64_t bx = base[3 * i], by = base[3 * i + 1], bz = base[3 * i + 2];
-            const double fx = frac[3 * i], fy = frac[3 * i + 1], fz = frac[3 * i + 2];
-            double a = 0.0, b = 0.0;
-            for (int dz = 0; dz < 2; ++dz)
-                for (int dy = 0; dy < 2; ++dy)
-                    for (int dx = 0; dx < 2; ++dx) {
-                        const double wgt = (dx ? fx : 1.0 - fx) * (dy ? fy : 1.0 - fy) * (dz ? fz : 1.0 - fz);
-                        const int64_t g = node(bx + dx, by + dy, bz + dz);
-                        a += wgt * num[g];
-                        b += wgt * den[g];
-                    }
-            const double w = weights.empty() ? 1.0 : double(weights[i]);
-            value[i] = b > 0.0 ? static_cast<float>(w * a / b) : 0.0f;
-        }
-    });
-    return true;
-}
-
 // The surface's aggregates (post/surface_aggregates.h) with what the return's low-pass needs of them, built once per
 // smoothing. The mesh's umbrella low-pass keeps sum(valence x), so the aggregates' one is made to keep it too (and
 // then returns what the mesh's would): values are restricted as valence-weighted means, and filtered as a normalised
@@ -549,29 +435,24 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
         if (!settings.local_return) continue;
         // The part's normal displacement, low-passed over the surface, goes back along the normals.
         normals_and_areas(mesh, adjacency, normals, areas, threads);  // of a smoothed surface: smooth enough as they are
-        if (part == 0 || !settings.reuse_return) {
-            parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-                for (int64_t i = begin; i < end; ++i) {
-                    float d = 0.0f;
-                    for (int k = 0; k < 3; ++k) d += (mesh.vertices[3 * i + k] - before[3 * i + k]) * normals[3 * i + k];
-                    offset[i] = d;
-                }
-            });
-            if (coarse_return && part == 0) {
-                aggregates = return_aggregates(mesh, adjacency, cell, threads);
-                report.aggregates = aggregates.aggregates.size();
-                coarse_return = report.aggregates > 0;  // none: the scene spans too many cells for the keys
+        parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+            for (int64_t i = begin; i < end; ++i) {
+                float d = 0.0f;
+                for (int k = 0; k < 3; ++k) d += (mesh.vertices[3 * i + k] - before[3 * i + k]) * normals[3 * i + k];
+                offset[i] = d;
             }
-            const double tolerance = settings.return_tolerance > 0.0 ? settings.return_tolerance : kReturnTolerance;
-            if (settings.grid_return && grid_average(mesh.vertices, areas, weights, offset, local_scale, threads)) {
-                // the research variant, when asked for and the grid fits
-            } else if (coarse_return) {
-                report.applications +=
-                    aggregate_low_pass(offset, mesh, adjacency, aggregates, areas, cell, local_scale, tolerance, report.edge, threads, report,
-                                       workspace);
-            } else {
-                report.applications += heat_filter(offset, 1, adjacency, {}, return_iterations, tolerance, threads, nullptr, &workspace);
-            }
+        });
+        if (coarse_return && part == 0) {
+            aggregates = return_aggregates(mesh, adjacency, cell, threads);
+            report.aggregates = aggregates.aggregates.size();
+            coarse_return = report.aggregates > 0;  // none: the scene spans too many cells for the keys
+        }
+        const double tolerance = settings.return_tolerance > 0.0 ? settings.return_tolerance : kReturnTolerance;
+        if (coarse_return) {
+            report.applications +=
+                aggregate_low_pass(offset, mesh, adjacency, aggregates, areas, cell, local_scale, tolerance, report.edge, threads, report, workspace);
+        } else {
+            report.applications += heat_filter(offset, 1, adjacency, {}, return_iterations, tolerance, threads, nullptr, &workspace);
         }
         parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
             for (int64_t i = begin; i < end; ++i) {

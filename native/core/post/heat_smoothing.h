@@ -97,11 +97,6 @@ struct HeatSmoothingSettings {
     double max_offset = 0.0;        // cap of the correction's offset (absolute; 0: 4 r)
     int parts = 0;                  // 0: automatic (heat time <= kPartTime r^2 each)
     // Research knobs (bench/smoothing_scale.py variants; the pipeline leaves them as they are):
-    bool grid_return = false;       // low-pass the returned displacement on a spatial grid instead of the mesh: a few
-                                    // passes instead of ~40 applications, but it mixes neighbouring pieces (droplets
-                                    // 0.41-0.78, hilbert2 0.91 before the correction): dropped
-    bool reuse_return = false;      // return part 1's low-passed displacement again after the later parts: a third less
-                                    // work, same tube smoothness, but slope flicker 0.062 instead of 0.055: dropped
     double return_tolerance = 0.0;  // 0: kReturnTolerance (3e-3 / 1e-2 / 3e-2 measured: flicker 0.0597 / 0.0599 / 0.0606)
     double local_scale = 0.0;       // reach of the return's low-pass in r; 0: kLocalScale
     double aggregate_size = -1.0;   // cell of the surface aggregates the return's low-pass runs on (in r, at least two
