@@ -161,7 +161,7 @@ std::vector<ParameterSpec> make_schema() {
                     .help("How far smoothing reaches: a heat flow that removes the particles' bumps alike at every cube "
                           "size up to 0.5 (growing with the cube above it, as coarse cubes need) while tubes, sheets and "
                           "drops keep their volume where they are (4.28: as far as 64 iterations at cube size 0.5). 0: the "
-                          "paper's iterations instead, about a third of the cost, whose reach shrinks with the cube and "
+                          "paper's iterations instead, less than half the cost, whose reach shrinks with the cube and "
                           "whose lost volume is given back per piece").done());
     s.push_back(Spec::flag("smoothing_weights", &P::smoothing_weights, post).group("smoothing").label("Keep Splashes")
                     .cli("--mesh-smoothing-weights").depends_on("smoothing_iterations")
