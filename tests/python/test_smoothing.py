@@ -61,7 +61,7 @@ def test_thin_tubes_keep_their_volume_where_they_are(hilbert2):
 def test_droplets_keep_their_volume_at_coarse_cubes():
     positions = particles("double_dam_break_frame_26_4732_particles.vtk")
     for cube in (1.0, 0.5):
-        mesh = meniscus.reconstruct(positions, R, cube_size=cube, keep_raw_mesh=True, smoothing_reach=REACH)
+        mesh = meniscus.reconstruct(positions, R, cube_size=cube, keep_raw_mesh=True)  # the default: the reach
         assert droplet_min(mesh.raw, mesh) >= 0.95, cube
         q = meniscus.assess_quality(mesh, raw=mesh.raw)
         assert abs(q["volume_ratio"] - 1) < 0.01
@@ -71,7 +71,7 @@ def test_droplets_keep_their_volume_at_coarse_cubes():
 def test_flat_water_is_smoothed_at_every_cube_size():
     positions = particles("dam_break_frame_9_6859_particles.bgeo")
     for cube in (0.5, 1.0):
-        mesh = meniscus.reconstruct(positions, R, cube_size=cube, keep_raw_mesh=True, smoothing_reach=REACH)
+        mesh = meniscus.reconstruct(positions, R, cube_size=cube, keep_raw_mesh=True)  # the default: the reach
         q = meniscus.assess_quality(mesh, particle_radius=R, raw=mesh.raw)
         assert q["hfl_ratio"] <= 0.15, cube
         assert abs(q["volume_ratio"] - 1) < 0.01
