@@ -32,7 +32,7 @@ CASES = {
     "cleanup, uniform smoothing, SPH normals c=1.0": dict(FULL, cube_size=1.0, mesh_cleanup=True,
                                                           decimate_barnacles=False, smoothing_weights=False,
                                                           volume_restoration=False, sph_normals=True),
-    # The opt-in heat flow of a physical reach (post/heat_smoothing.h) at the setting README's figures were measured with.
+    # The heat flow of a physical reach (post/heat_smoothing.h; the default since issue 12), at c = 1.0 where it grows.
     "physical-reach smoothing 4.28 r c=1.0": dict(FULL, cube_size=1.0, smoothing_reach=4.28),
 }
 
