@@ -417,6 +417,7 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
 
     const double local_scale = (settings.local_scale > 0.0 ? settings.local_scale : kLocalScale) * radius;
     const double return_iterations = std::min(std::pow(local_scale / report.edge, 2.0), kMaxIterations);
+    const double tolerance = settings.return_tolerance > 0.0 ? settings.return_tolerance : kReturnTolerance;
     std::vector<float> before, offset, normals, areas;
     if (settings.local_return) offset.resize(static_cast<std::size_t>(nv));
     // Aggregates for the return's low-pass when the mesh is fine (built once, from the first part's surface: the parts
@@ -447,7 +448,6 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
             report.aggregates = aggregates.aggregates.size();
             coarse_return = report.aggregates > 0;  // none: the scene spans too many cells for the keys
         }
-        const double tolerance = settings.return_tolerance > 0.0 ? settings.return_tolerance : kReturnTolerance;
         if (coarse_return) {
             report.applications +=
                 aggregate_low_pass(offset, mesh, adjacency, aggregates, areas, cell, local_scale, tolerance, report.edge, threads, report, workspace);
