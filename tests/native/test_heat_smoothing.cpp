@@ -222,6 +222,65 @@ TEST_CASE("heat smoothing: weight-0 vertices keep their bits", "[heat]") {
     CHECK(smoothed.vertices == mesh.vertices);
 }
 
+// A double cone over an n-gon: two apexes of valence n, ring vertices of valence 4.
+TriMesh double_cone(int n) {
+    TriMesh m;
+    add_vertex(m, {0.0, 0.0, 1.0});
+    add_vertex(m, {0.0, 0.0, -1.3});
+    for (int k = 0; k < n; ++k) add_vertex(m, {std::cos(2.0 * kPi * k / n), (1.0 + 0.3 * (k % 3)) * std::sin(2.0 * kPi * k / n), 0.1 * (k % 2)});
+    for (int k = 0; k < n; ++k) {
+        const int32_t a = 2 + k, b = 2 + (k + 1) % n;
+        add_triangle(m, 0, a, b);
+        add_triangle(m, 1, b, a);
+    }
+    return m;
+}
+
+TEST_CASE("heat filter: rows longer than the fixed width count every neighbour (against a double-precision series)", "[heat]") {
+    for (int n : {5, 8, 9, 13}) {  // apex rows shorter than, at, just over and well over the fixed width (8)
+        const TriMesh mesh = double_cone(n);
+        const MeshAdjacency adjacency = build_adjacency(mesh, 1);
+        REQUIRE(adjacency.valence(0) == n);
+        const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
+        std::vector<float> weights(static_cast<std::size_t>(nv));
+        for (int64_t i = 0; i < nv; ++i) weights[i] = 0.4f + 0.05f * static_cast<float>(i % 7);
+        const double iterations = 6.0;
+        const std::vector<double> c = heat_coefficients(iterations, 1e-6);
+        for (int dims : {1, 3}) {
+            std::vector<double> start(static_cast<std::size_t>(dims * nv));
+            for (int64_t i = 0; i < nv; ++i)
+                for (int d = 0; d < dims; ++d) start[dims * i + d] = dims == 3 ? mesh.vertices[3 * i + d] : std::sin(1.7 * i);
+            // exp(N (Y - I)) x as the series sum c_k T_k(Y) x, Y = I + w (mean - I), in double over the CSR rows.
+            auto apply = [&](const std::vector<double>& t) {
+                std::vector<double> y(t.size());
+                for (int64_t i = 0; i < nv; ++i)
+                    for (int d = 0; d < dims; ++d) {
+                        double sum = 0.0;
+                        for (int64_t k = adjacency.vertex_neighbours.begin(i); k < adjacency.vertex_neighbours.end(i); ++k)
+                            sum += t[dims * adjacency.vertex_neighbours.items[k] + d] - t[dims * i + d];
+                        y[dims * i + d] = t[dims * i + d] + weights[i] * sum / adjacency.valence(i);
+                    }
+                return y;
+            };
+            std::vector<double> older = start, current = apply(start), expected(start.size());
+            for (std::size_t e = 0; e < start.size(); ++e) expected[e] = c[0] * older[e] + c[1] * current[e];
+            for (std::size_t k = 2; k < c.size(); ++k) {
+                std::vector<double> next = apply(current);
+                for (std::size_t e = 0; e < start.size(); ++e) next[e] = 2.0 * next[e] - older[e], expected[e] += c[k] * next[e];
+                older.swap(current), current.swap(next);
+            }
+            std::vector<float> x(start.begin(), start.end());
+            heat_filter(x, dims, adjacency, weights, iterations, 1e-6, 2);
+            double moved = 0.0;
+            for (std::size_t e = 0; e < start.size(); ++e) {
+                CHECK(std::fabs(x[e] - expected[e]) < 2e-6);
+                moved = std::max(moved, std::fabs(expected[e] - start[e]));
+            }
+            CHECK(moved > 0.05);  // the filter did smooth: the comparison is not between two unmoved copies
+        }
+    }
+}
+
 TEST_CASE("heat smoothing: pool smoothed, tube keeps its volume where it is, droplet untouched", "[heat][slow]") {
     const std::vector<float> p = scene(true, true);
     for (double cube : {1.0, 0.5}) {

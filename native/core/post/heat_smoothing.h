@@ -34,11 +34,6 @@ struct MeshAdjacency;
 struct WallConstraints;
 struct UnsmoothedSurface;
 
-// The Chebyshev recurrence's three vectors (heat_filter), for reuse across calls.
-struct HeatFilterWorkspace {
-    std::vector<float> older, current, sum;
-};
-
 // The cube size (in r) up to which the reach stays what the user set. Above it the reach grows with the cube, as the
 // paper's iterations' reach does (each moves a fraction of an edge): coarse marching cubes alias from frame to frame
 // and need it. Measured on the sequence (slope flicker / pysplashsurf's): c = 1.0: 1.06 at 4 r without the growth,
@@ -82,11 +77,9 @@ std::vector<double> heat_coefficients(double n, double tolerance);
 // x <- exp(N (Y - I)) x in place, `dims` (1 or 3) floats per vertex; weights (per vertex in [0, 1]) may be empty (1
 // everywhere). frozen: optional, per vertex a bit mask of coordinates (bit k: coordinate k) the operator leaves as
 // they are (walls). Vertices of weight 0 or without neighbours keep their values bit for bit. Returns the number of
-// operator applications. workspace: optional, buffers kept between calls (a few tens of MB each at a million
-// vertices: allocated once, their pages are not faulted in again by every filter).
+// operator applications.
 int heat_filter(std::vector<float>& x, int dims, const MeshAdjacency& adjacency, const std::vector<float>& weights, double n,
-                double tolerance, int threads, const std::vector<uint8_t>* frozen = nullptr,
-                HeatFilterWorkspace* workspace = nullptr);
+                double tolerance, int threads, const std::vector<uint8_t>* frozen = nullptr);
 
 struct HeatSmoothingSettings {
     double reach = 0.0;             // absolute (scene units): heat time reach^2 / 4
