@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <utility>
 #include <vector>
 
@@ -42,20 +43,67 @@ void renumber_adjacency(MeshAdjacency& adjacency, const std::vector<int32_t>& ne
     renumber_rows(adjacency.vertex_neighbours, true);
 }
 
-// The adjacency of the working mesh after a pass (deleted triangles dropped), from the one before it. Every
+// Replaces the rows of the claimed vertices (ascending in `touched`) by `fresh` and renumbers the other rows' items
+// through `renumber` (may be null), in place. Between two touched rows every row moves by the same shift, so the
+// rows move as a few long segments; segments moving down go first, in vertex order, then those moving up, in reverse
+// order: neither overwrites a segment not yet moved (their final places are disjoint and keep the order). In place,
+// because a copy of both lists is ~160 MB of fresh pages at a million particles, for a pass that touched a few
+// hundred rows.
+void replace_rows(CsrList& list, const std::vector<int32_t>& touched, const std::vector<std::vector<int32_t>>& fresh,
+                  const std::vector<uint8_t>& claimed, const int32_t* renumber, int threads) {
+    const int64_t nv = static_cast<int64_t>(list.rows());
+    if (renumber)
+        parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+            for (int64_t v = begin; v < end; ++v)
+                if (!claimed[v])
+                    for (int64_t k = list.begin(v); k < list.end(v); ++k) list.items[k] = renumber[list.items[k]];
+        });
+    struct Segment {
+        int64_t first_row, end_row;   // rows [first_row, end_row): those after a touched row, up to the next one (or nv)
+        int64_t old_begin, old_end;   // their items before the move
+        int64_t shift;
+    };
+    std::vector<Segment> segments;
+    int64_t shift = 0;
+    for (std::size_t i = 0; i < touched.size(); ++i) {
+        const int64_t t = touched[i];
+        shift += static_cast<int64_t>(fresh[i].size()) - list.size(static_cast<std::size_t>(t));
+        const int64_t end_row = i + 1 < touched.size() ? touched[i + 1] : nv;
+        segments.push_back({t + 1, end_row, list.offsets[t + 1], list.offsets[end_row], shift});
+    }
+    const int64_t old_total = list.offsets[nv];
+    if (old_total + shift > old_total) list.items.resize(static_cast<std::size_t>(old_total + shift));
+    auto move = [&](const Segment& g) {
+        if (g.shift != 0 && g.old_end > g.old_begin)
+            std::memmove(list.items.data() + g.old_begin + g.shift, list.items.data() + g.old_begin,
+                         static_cast<std::size_t>(g.old_end - g.old_begin) * sizeof(int32_t));
+    };
+    for (const Segment& g : segments)
+        if (g.shift < 0) move(g);
+    for (auto g = segments.rbegin(); g != segments.rend(); ++g)
+        if (g->shift > 0) move(*g);
+    // New row starts: a segment's rows and the touched row after it (or the end) start `shift` later.
+    for (const Segment& g : segments)
+        for (int64_t v = g.first_row; v <= g.end_row; ++v) list.offsets[v] += g.shift;
+    for (std::size_t i = 0; i < touched.size(); ++i) std::copy(fresh[i].begin(), fresh[i].end(), list.items.data() + list.offsets[touched[i]]);
+    list.items.resize(static_cast<std::size_t>(list.offsets[nv]));
+}
+
+// The working mesh's adjacency after a pass (deleted triangles dropped), patched from the one before it. Every
 // triangle a collapse rewrote or deleted has all its corners in the pass's claimed regions (a collapse n -> c only
 // touches triangles around n, whose corners are neighbours of n), so a vertex outside them keeps its neighbours
 // and its triangles, which only get their new numbers; rows of claimed vertices are recomputed from their current
-// fans. The same lists as a rebuild, in one linear pass.
-MeshAdjacency patch_adjacency(const MeshAdjacency& before, const CollapseMesh& work, const std::vector<int32_t>& triangles,
-                              const std::vector<uint8_t>& claimed, int threads) {
+// fans. The same lists as a rebuild.
+void patch_adjacency(MeshAdjacency& adjacency, const CollapseMesh& work, const std::vector<int32_t>& triangles,
+                     const std::vector<uint8_t>& claimed, int threads) {
     const std::vector<uint8_t>& deleted = work.deleted_triangles();
     std::vector<int32_t> new_id(deleted.size(), -1);
     int32_t next_id = 0;
     for (std::size_t t = 0; t < deleted.size(); ++t)
         if (!deleted[t]) new_id[t] = next_id++;
     const int64_t nv = static_cast<int64_t>(claimed.size());
-    // Claimed vertices: current triangles (new numbers, ascending) and neighbours.
+    // Claimed vertices: current triangles (new numbers, ascending) and neighbours, from the fans `work` reads in the
+    // lists as they are (before they change below).
     std::vector<int32_t> touched;
     for (int64_t v = 0; v < nv; ++v)
         if (claimed[v]) touched.push_back(static_cast<int32_t>(v));
@@ -77,26 +125,8 @@ MeshAdjacency patch_adjacency(const MeshAdjacency& before, const CollapseMesh& w
                 collect_vertex_neighbours(triangles.data(), v, row.data(), static_cast<int32_t>(row.size()), rings[i].data())));
         }
     });
-    std::vector<int32_t> slot(static_cast<std::size_t>(nv), -1);
-    for (std::size_t i = 0; i < touched.size(); ++i) slot[touched[i]] = static_cast<int32_t>(i);
-    MeshAdjacency after;
-    auto assemble = [&](const CsrList& old, const std::vector<std::vector<int32_t>>& fresh, bool renumber, CsrList& out) {
-        out.offsets.assign(static_cast<std::size_t>(nv) + 1, 0);
-        for (int64_t v = 0; v < nv; ++v)
-            out.offsets[v + 1] = out.offsets[v] + (slot[v] >= 0 ? static_cast<int64_t>(fresh[slot[v]].size()) : old.size(v));
-        out.items.resize(static_cast<std::size_t>(out.offsets.back()));
-        parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-            for (int64_t v = begin; v < end; ++v) {
-                int32_t* dst = out.items.data() + out.offsets[v];
-                if (slot[v] >= 0) std::copy(fresh[slot[v]].begin(), fresh[slot[v]].end(), dst);
-                else
-                    for (int64_t k = old.begin(v); k < old.end(v); ++k) *dst++ = renumber ? new_id[old.items[k]] : old.items[k];
-            }
-        });
-    };
-    assemble(before.vertex_triangles, fans, true, after.vertex_triangles);
-    assemble(before.vertex_neighbours, rings, false, after.vertex_neighbours);
-    return after;
+    replace_rows(adjacency.vertex_triangles, touched, fans, claimed, new_id.data(), threads);
+    replace_rows(adjacency.vertex_neighbours, touched, rings, claimed, nullptr, threads);
 }
 
 
@@ -338,7 +368,7 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
         changed = changed || outcome.changed;
         if (!outcome.changed) break;
         adjacency_is_current = pass + 1 < kMaxDetectionPasses;  // the last pass's collapses are not patched in
-        if (adjacency_is_current) adj = patch_adjacency(adj, work, triangles, claimed_since(claim, pass_first_stamp), threads);
+        if (adjacency_is_current) patch_adjacency(adj, work, triangles, claimed_since(claim, pass_first_stamp), threads);
     }
     if (changed) {
         claim = std::vector<int32_t>();
