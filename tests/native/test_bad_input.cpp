@@ -399,7 +399,7 @@ TEST_CASE("a frame too large for memory is refused with the estimate", "[bad-inp
         INFO(e.what());
         CHECK_THAT(e.what(), Catch::Contains("cube size 0.0001 r"));
         CHECK_THAT(e.what(), Catch::Contains("would need about"));
-        CHECK_THAT(e.what(), Catch::Contains("TiB"));
+        CHECK_THAT(e.what(), Catch::Contains("PiB"));
     }
     // An explicit budget is honoured.
     REQUIRE_THROWS_AS(reconstruct(frame, 0.5, 1 << 20), ResourceError);

@@ -63,8 +63,8 @@ std::vector<uint8_t> particles_in_box(const PositionsView& positions, std::vecto
 
 // Rough upper estimate of the bytes the mesh of this frame needs, from the particle cells on the fluid's boundary
 // (cells with a missing face neighbour): each carries about one kernel support squared of surface, meshed with
-// about 4 triangles per cube face area; about 120 bytes per triangle cover the mesh, the bricks' pieces before
-// stitching and the post-processing's adjacency.
+// about 4 triangles per cube face area; about 140 bytes per triangle cover the mesh, the bricks' pieces before
+// stitching and the post-processing's adjacency (and the heat flow's fixed-width rows, ~20 of the 140).
 double estimate_mesh_bytes(const ParticleGrid& grid, double cube_edge, std::size_t* estimated_triangles) {
     std::size_t boundary_cells = 0;
     for (std::size_t cell = 0; cell < grid.num_cells(); ++cell) {
@@ -79,7 +79,7 @@ double estimate_mesh_bytes(const ParticleGrid& grid, double cube_edge, std::size
     const double ratio = grid.cell_size() / cube_edge;
     const double triangles = 4.0 * double(boundary_cells) * ratio * ratio;
     if (estimated_triangles) *estimated_triangles = static_cast<std::size_t>(std::min(triangles, 1e18));
-    return triangles * 120.0;
+    return triangles * 140.0;
 }
 
 }  // namespace
