@@ -1,6 +1,7 @@
 // Mesh connectivity (mesh/adjacency.h): one-rings, triangle fans and edges, the same for any thread count.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -39,4 +40,33 @@ TEST_CASE("adjacency: one-rings, edges and their triangles", "[adjacency]") {
     const MeshAdjacency one = build_adjacency(m, 1);
     CHECK(one.vertex_triangles.items == adj.vertex_triangles.items);
     CHECK(one.vertex_neighbours.items == adj.vertex_neighbours.items);
+}
+
+TEST_CASE("adjacency: one-rings of open meshes and degenerate triangles match a brute-force count", "[adjacency]") {
+    // A closed mesh takes the direct path (as many neighbours as triangles); a hole, a fin sharing an edge with
+    // two triangles (non-manifold) and a triangle with a repeated index take the general one.
+    TriMesh closed = make_icosphere(2);
+    TriMesh open = closed;
+    open.triangles.resize(open.triangles.size() - 3 * 5);  // five triangles gone: a hole
+    TriMesh odd = closed;
+    add_vertex(odd, {0.0, 0.0, 3.0});
+    const std::vector<int32_t> first(odd.triangles.begin(), odd.triangles.begin() + 6);
+    add_triangle(odd, first[0], first[1], static_cast<int32_t>(odd.num_vertices() - 1));  // a fin on the first edge
+    add_triangle(odd, first[3], first[3], first[4]);                                      // a repeated index
+    for (const TriMesh* m : {&closed, &open, &odd}) {
+        const MeshAdjacency adj = build_adjacency(*m, 2);
+        std::vector<std::vector<int32_t>> expected(m->num_vertices());
+        for (std::size_t t = 0; t < m->num_triangles(); ++t)
+            for (int a = 0; a < 3; ++a)
+                for (int b = 0; b < 3; ++b) {
+                    const int32_t u = m->triangles[3 * t + a], w = m->triangles[3 * t + b];
+                    if (u != w) expected[u].push_back(w);
+                }
+        for (std::size_t v = 0; v < m->num_vertices(); ++v) {
+            std::sort(expected[v].begin(), expected[v].end());
+            expected[v].erase(std::unique(expected[v].begin(), expected[v].end()), expected[v].end());
+            const std::vector<int32_t> row(adj.vertex_neighbours.row(v), adj.vertex_neighbours.row(v) + adj.valence(v));
+            CHECK(row == expected[v]);
+        }
+    }
 }

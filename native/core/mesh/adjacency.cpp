@@ -1,6 +1,7 @@
 #include "mesh/adjacency.h"
 
 #include <algorithm>
+#include <atomic>
 #include <memory>
 
 #include "base/errors.h"
@@ -85,6 +86,28 @@ CsrList build_vertex_neighbours(const TriMesh& mesh, const CsrList& vt, int thre
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
     const int32_t* tris = mesh.triangles.data();
     CsrList list;
+    // In a closed manifold mesh (marching cubes') a vertex has as many neighbours as triangles: the rows go straight
+    // into the triangle rows' layout. A vertex on a border or a non-manifold edge breaks that; then the general
+    // path below runs.
+    list.items.resize(vt.items.size());
+    std::atomic<bool> closed_manifold{true};
+    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        if (!closed_manifold.load(std::memory_order_relaxed)) return;
+        std::vector<int32_t> row;
+        for (int64_t v = begin; v < end; ++v) {
+            row.resize(2 * static_cast<std::size_t>(vt.size(v)) + 1);
+            const int32_t count = collect_vertex_neighbours(tris, static_cast<int32_t>(v), vt.row(v), vt.size(v), row.data());
+            if (count != vt.size(v)) {
+                closed_manifold.store(false, std::memory_order_relaxed);
+                return;
+            }
+            std::copy(row.begin(), row.begin() + count, list.items.begin() + vt.begin(v));
+        }
+    });
+    if (closed_manifold.load()) {
+        list.offsets = vt.offsets;
+        return list;
+    }
     list.offsets.assign(static_cast<std::size_t>(nv) + 1, 0);
     // Every triangle around v offers two candidates: gather them into v's slice of a scratch array (twice the
     // size of v's triangle row), sort and deduplicate in place, then compact all rows into the result.
