@@ -108,6 +108,7 @@ CsrList build_vertex_neighbours(const TriMesh& mesh, const CsrList& vt, int thre
         list.offsets = vt.offsets;
         return list;
     }
+    list.items = std::vector<int32_t>();  // not held beside the scratch array below
     list.offsets.assign(static_cast<std::size_t>(nv) + 1, 0);
     // Every triangle around v offers two candidates: gather them into v's slice of a scratch array (twice the
     // size of v's triangle row), sort and deduplicate in place, then compact all rows into the result.

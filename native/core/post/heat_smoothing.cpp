@@ -54,26 +54,21 @@ struct UmbrellaRows {
 UmbrellaRows umbrella_rows(const CsrList& nb, int threads) {
     const int64_t nv = static_cast<int64_t>(nb.rows());
     UmbrellaRows rows;
-    std::vector<std::pair<int64_t, int32_t>> long_rows;  // (vertex, where its rest starts): rare, in vertex order
-    for (int64_t i = 0; i < nv; ++i)
+    rows.columns.resize(static_cast<std::size_t>(nv) * kRowWidth);
+    for (int64_t i = 0; i < nv; ++i)  // the rare long rows' rests, in vertex order; their other columns below
         if (nb.size(i) > kRowWidth) {
-            long_rows.emplace_back(i, static_cast<int32_t>(rows.overflow.size()));
+            rows.columns[kRowWidth * i + kRowWidth - 1] = ~static_cast<int32_t>(rows.overflow.size());
             rows.overflow.push_back(nb.size(i) - (kRowWidth - 1));
             rows.overflow.insert(rows.overflow.end(), nb.row(i) + (kRowWidth - 1), nb.row(i) + nb.size(i));
         }
-    rows.columns.resize(static_cast<std::size_t>(nv) * kRowWidth);
     parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t i = begin; i < end; ++i) {
             const int32_t m = nb.size(i);
             const int32_t* row = nb.row(i);
             int32_t* out = rows.columns.data() + kRowWidth * i;
-            if (m <= kRowWidth) {
+            if (m > kRowWidth) std::copy(row, row + (kRowWidth - 1), out);
+            else
                 for (int k = 0; k < kRowWidth; ++k) out[k] = k < m ? row[k] : static_cast<int32_t>(i);
-                continue;
-            }
-            std::copy(row, row + (kRowWidth - 1), out);
-            const auto at = std::lower_bound(long_rows.begin(), long_rows.end(), std::make_pair(i, int32_t{0}));
-            out[kRowWidth - 1] = ~at->second;
         }
     });
     return rows;
