@@ -114,9 +114,13 @@ def run_ours(positions, cube, variant="reach", keep_raw=True, threads=0):
         return out
     settings = dict(json.loads(variant))
     reach = settings.pop("reach", 4.0)
+    smoothstep = settings.pop("weights_smoothstep", True)  # Eq. 9 on the weights the flow reads
     start = time.perf_counter()
-    mesh = meniscus.reconstruct(positions, **common, smoothing_iterations=0, output_weights=True, normals=False)
+    mesh = meniscus.reconstruct(positions, **common, smoothing_iterations=0, output_weights=True, normals=False,
+                                weights_smoothstep=smoothstep)
     unsmoothed = time.perf_counter() - start
+    if reach == "auto":  # the pipeline's: REACH up to c = 0.5, growing with the cube above it (smoothing_reach_at)
+        reach = REACH * max(1.0, cube / 0.5)
     if isinstance(reach, str) and reach.startswith("floor"):  # "floor:K": max(4 r, K x the cube edge)
         reach = max(4.0, float(reach.split(":")[1]) * cube)
     start = time.perf_counter()

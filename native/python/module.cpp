@@ -465,7 +465,7 @@ PYBIND11_MODULE(_core, m) {
         return py::make_tuple(to_numpy(std::move(c.volume), {n}), to_numpy(std::move(c.centroid), {n, 3}));
     }, py::arg("vertices"), py::arg("triangles"), "(volume (C,), centroid (C, 3)) per connected component with triangles.");
     m.def("heat_smooth", [](const py::array& vertices, const py::array& triangles, const py::object& weights, double reach,
-                            double particle_radius, bool local_return, bool volume_correction, int parts, double return_tolerance, double local_scale, double aggregate_size, const py::object& wall_mask,
+                            double particle_radius, bool local_return, bool volume_correction, int parts, double part_time, double return_tolerance, double local_scale, double aggregate_size, const py::object& wall_mask,
                             const py::object& wall_planes, int threads) {
         TriMesh mesh = mesh_from_arrays(vertices, triangles, py::none(), py::dict());
         std::vector<float> w;
@@ -483,6 +483,7 @@ PYBIND11_MODULE(_core, m) {
         settings.local_return = local_return;
         settings.volume_correction = volume_correction;
         settings.parts = parts;
+        settings.part_time = part_time;
         settings.return_tolerance = return_tolerance;
         settings.local_scale = local_scale;
         settings.aggregate_size = aggregate_size;
@@ -508,7 +509,7 @@ PYBIND11_MODULE(_core, m) {
         const py::ssize_t n = static_cast<py::ssize_t>(mesh.num_vertices());
         return py::make_tuple(to_numpy(std::move(mesh.vertices), {n, 3}), info);
     }, py::arg("vertices"), py::arg("triangles"), py::arg("weights") = py::none(), py::arg("reach") = 0.0, py::arg("particle_radius") = 0.0,
-       py::arg("local_return") = true, py::arg("volume_correction") = true, py::arg("parts") = 0, py::arg("return_tolerance") = 0.0, py::arg("local_scale") = 0.0, py::arg("aggregate_size") = -1.0, py::arg("wall_mask") = py::none(),
+       py::arg("local_return") = true, py::arg("volume_correction") = true, py::arg("parts") = 0, py::arg("part_time") = 0.0, py::arg("return_tolerance") = 0.0, py::arg("local_scale") = 0.0, py::arg("aggregate_size") = -1.0, py::arg("wall_mask") = py::none(),
        py::arg("wall_planes") = py::none(), py::arg("threads") = 0,
        "The physical-reach smoothing stage (post/heat_smoothing.h; the default) on a mesh: reach and "
        "particle_radius absolute; returns (vertices (V, 3) float32, report dict).");

@@ -509,7 +509,7 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     report.iterations = std::min((settings.reach / report.edge) * (settings.reach / report.edge), kMaxIterations);
     const double time = 0.25 * settings.reach * settings.reach;
     report.parts = settings.parts > 0 ? settings.parts
-                                      : std::max(1, static_cast<int>(std::ceil(time / (kPartTime * radius * radius) - 0.05)));
+                                      : std::max(1, static_cast<int>(std::ceil(time / ((settings.part_time > 0.0 ? settings.part_time : kPartTime) * radius * radius) - 0.05)));
 
     auto mark = std::chrono::steady_clock::now();
     if (settings.volume_correction && unsmoothed.labels.size() != mesh.num_vertices())

@@ -88,7 +88,8 @@ struct HeatSmoothingSettings {
     bool volume_correction = true;  // final exact per-component volume (Newton along the smoothed normals)
     int normal_iterations = 10;     // smoothing of the correction's normals (Eq. 12); returned in the report
     double max_offset = 0.0;        // cap of the correction's offset (absolute; 0: 4 r)
-    int parts = 0;                  // 0: automatic (heat time <= kPartTime r^2 each)
+    int parts = 0;                  // 0: automatic (heat time <= part_time r^2 each)
+    double part_time = 0.0;         // in r^2; 0: kPartTime
     // Research knobs (bench/smoothing_scale.py variants; the pipeline leaves them as they are):
     double return_tolerance = 0.0;  // 0: kReturnTolerance (3e-3 / 1e-2 / 3e-2 measured: flicker 0.0597 / 0.0599 / 0.0606)
     double local_scale = 0.0;       // reach of the return's low-pass in r; 0: kLocalScale
