@@ -180,14 +180,14 @@ TEST_CASE("heat smoothing: the same physical result for any edge length", "[heat
 
 
 TEST_CASE("heat smoothing: the part time sets how often the return runs, not what the flow does", "[heat]") {
-    // Heat time 4 r^2: 2 parts of <= 2.5 r^2 (kPartTime), 7 of <= 0.625 r^2 (bench/smoothing_scale.py's part_time
-    // variants). exp(-t L) is the product of its parts' filters, so without the return both give the same surface.
+    // Heat time 4 r^2: 4 parts of <= 1.25 r^2 (kPartTime), 2 of <= 2.5 r^2 (the part time before). exp(-t L) is the
+    // product of its parts' filters, so without the return both give the same surface.
     const double size = 24 * kRadius;
     TriMesh base = wavy_plane(size, 0.54 * kRadius, 6 * kRadius, 0.2 * kRadius);
     const MeshAdjacency adjacency = build_adjacency(base, 2);
     std::vector<TriMesh> out;
     std::vector<int> parts;
-    for (double part_time : {0.0, 0.625}) {
+    for (double part_time : {0.0, 2.5}) {
         TriMesh m = base;
         HeatSmoothingSettings s;
         s.reach = 4 * kRadius;
@@ -198,8 +198,8 @@ TEST_CASE("heat smoothing: the part time sets how often the return runs, not wha
         parts.push_back(heat_smooth(m, adjacency, std::vector<float>(m.num_vertices(), 1.0f), s, 2).parts);
         out.push_back(std::move(m));
     }
-    CHECK(parts[0] == 2);
-    CHECK(parts[1] == 7);
+    CHECK(parts[0] == 4);
+    CHECK(parts[1] == 2);
     double largest = 0.0, moved = 0.0;
     for (std::size_t i = 0; i < base.vertices.size(); ++i) {
         largest = std::max(largest, std::fabs(double(out[0].vertices[i]) - out[1].vertices[i]));

@@ -281,34 +281,50 @@ void correct_component_volumes(TriMesh& mesh, const std::vector<int32_t>& labels
 }
 
 
-// Unit area-weighted vertex normals and vertex areas (a third of the incident triangles' areas) in one pass.
-void normals_and_areas(const TriMesh& mesh, const MeshAdjacency& adjacency, std::vector<float>& normals, std::vector<float>& areas,
-                       int threads) {
-    const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
+// Unit area-weighted vertex normals and, when `areas` is given, vertex areas (a third of the incident triangles'
+// areas). Every part's return needs the normals: each triangle's cross product is computed once into per_triangle
+// (3 floats per triangle, kept by the caller across parts), not once per corner.
+void vertex_normals(const TriMesh& mesh, const MeshAdjacency& adjacency, std::vector<float>& normals, std::vector<float>* areas,
+                    std::vector<float>& per_triangle, int threads) {
+    const int64_t nv = static_cast<int64_t>(mesh.num_vertices()), nt = static_cast<int64_t>(mesh.num_triangles());
     const CsrList& vt = adjacency.vertex_triangles;
     normals.resize(mesh.vertices.size());
-    areas.resize(static_cast<std::size_t>(nv));
+    if (areas) areas->resize(static_cast<std::size_t>(nv));
+    per_triangle.resize(3 * static_cast<std::size_t>(nt));
+    // Float cross products: the normals only set the return's direction, and the edges of one triangle are of one size.
+    parallel_blocks(nt, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t f = begin; f < end; ++f) {
+            const int32_t* t = mesh.triangles.data() + 3 * f;
+            const float *a = &mesh.vertices[3 * static_cast<int64_t>(t[0])], *b = &mesh.vertices[3 * static_cast<int64_t>(t[1])],
+                        *c = &mesh.vertices[3 * static_cast<int64_t>(t[2])];
+            const float u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+            const float w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+            float* n = per_triangle.data() + 3 * f;
+            n[0] = u[1] * w[2] - u[2] * w[1], n[1] = u[2] * w[0] - u[0] * w[2], n[2] = u[0] * w[1] - u[1] * w[0];
+            if (!std::isfinite(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])) n[0] = n[1] = n[2] = 0.0f;
+        }
+    });
     parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t v = begin; v < end; ++v) {
-            double sum[3] = {0.0, 0.0, 0.0}, largest[3] = {0.0, 0.0, 1.0}, largest_norm = 0.0, area = 0.0;
+            double sum[3] = {0.0, 0.0, 0.0}, area = 0.0;
             for (int64_t k = vt.begin(v); k < vt.end(v); ++k) {
-                const int32_t* t = mesh.triangles.data() + 3 * static_cast<int64_t>(vt.items[k]);
-                const float *a = &mesh.vertices[3 * static_cast<int64_t>(t[0])], *b = &mesh.vertices[3 * static_cast<int64_t>(t[1])],
-                            *c = &mesh.vertices[3 * static_cast<int64_t>(t[2])];
-                const double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
-                const double w[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
-                const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-                const double norm2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-                if (!std::isfinite(norm2)) continue;
+                const float* n = per_triangle.data() + 3 * static_cast<int64_t>(vt.items[k]);
                 sum[0] += n[0], sum[1] += n[1], sum[2] += n[2];
-                area += std::sqrt(norm2) / 6.0;
-                if (norm2 > largest_norm) largest_norm = norm2, largest[0] = n[0], largest[1] = n[1], largest[2] = n[2];
+                if (areas) area += std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]) / 6.0;
             }
             double l = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
-            const double* dir = sum;
-            if (!(l > 0.0)) dir = largest, l = std::sqrt(largest[0] * largest[0] + largest[1] * largest[1] + largest[2] * largest[2]);
-            for (int k = 0; k < 3; ++k) normals[3 * v + k] = static_cast<float>(l > 0.0 ? dir[k] / l : (k == 2 ? 1.0 : 0.0));
-            areas[v] = static_cast<float>(area);
+            if (!(l > 0.0)) {  // opposite faces cancel (a sheet folded onto itself): the largest incident face's
+                double largest_norm = 0.0;
+                sum[0] = 0.0, sum[1] = 0.0, sum[2] = 1.0;
+                for (int64_t k = vt.begin(v); k < vt.end(v); ++k) {
+                    const float* n = per_triangle.data() + 3 * static_cast<int64_t>(vt.items[k]);
+                    const double norm2 = double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2];
+                    if (norm2 > largest_norm) largest_norm = norm2, sum[0] = n[0], sum[1] = n[1], sum[2] = n[2];
+                }
+                l = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+            }
+            for (int k = 0; k < 3; ++k) normals[3 * v + k] = static_cast<float>(sum[k] / l);
+            if (areas) (*areas)[v] = static_cast<float>(area);
         }
     });
 }
@@ -324,9 +340,13 @@ struct ReturnAggregates {
     SurfaceAggregates aggregates;
     std::vector<float> valence;   // per vertex
     std::vector<double> density;  // per aggregate: mass / coupling (0 when coupled to nothing)
+    std::vector<double> filtered_density;  // per aggregate: the density low-passed (the same for every part's return)
+    std::vector<double> centre;   // per aggregate: area-weighted centroid of the surface they were built from
+    double coarse_edge = 0.0;     // RMS coupled distance between the centres
 };
 
-ReturnAggregates return_aggregates(const TriMesh& mesh, const MeshAdjacency& adjacency, double cell, int threads) {
+ReturnAggregates return_aggregates(const TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& areas, double cell,
+                                   int threads) {
     ReturnAggregates r;
     r.aggregates = aggregate_surface(mesh, adjacency, cell, threads);
     const SurfaceAggregates& g = r.aggregates;
@@ -340,6 +360,9 @@ ReturnAggregates return_aggregates(const TriMesh& mesh, const MeshAdjacency& adj
         for (int64_t k = g.neighbours.begin(a); k < g.neighbours.end(a); ++k) degree += g.coupling[k];
         r.density[a] = degree > 0.0 ? mass / degree : 0.0;
     }
+    if (g.size() == 0) return r;  // the scene spans too many cells for the keys: the return low-passes on the mesh
+    r.centre = restrict_to_aggregates(g, areas, mesh.vertices.data(), 3, threads);
+    r.coarse_edge = rms_coupled_distance(g, r.centre, threads);
     return r;
 }
 
@@ -351,7 +374,7 @@ ReturnAggregates return_aggregates(const TriMesh& mesh, const MeshAdjacency& adj
 // cell. Measured against the mesh's own low-pass (c = 0.25 and 0.5): hfL, volume and droplets the same to the third
 // digit, with a third of the applications.
 int aggregate_low_pass(std::vector<float>& value, const TriMesh& mesh, const UmbrellaRows& rows, const std::vector<float>& steps,
-                       const ReturnAggregates& coarse_surface, const std::vector<float>& areas, double cell, double reach, double tolerance,
+                       ReturnAggregates& coarse_surface, double cell, double reach, double tolerance,
                        double edge, int threads, HeatSmoothingReport& report, HeatFilterWorkspace& workspace) {
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
     const SurfaceAggregates& aggregates = coarse_surface.aggregates;
@@ -363,20 +386,23 @@ int aggregate_low_pass(std::vector<float>& value, const TriMesh& mesh, const Umb
         const auto range = std::minmax_element(coarse.begin(), coarse.end());
         lowest = *range.first, highest = *range.second;
     }
-    const std::vector<double> centre = restrict_to_aggregates(aggregates, areas, mesh.vertices.data(), 3, threads);
-    const double coarse_edge = rms_coupled_distance(aggregates, centre, threads);
+    const std::vector<double>& centre = coarse_surface.centre;
+    const double coarse_edge = coarse_surface.coarse_edge;
     report.coarse_edge = coarse_edge;
     if (coarse_edge > 0.0) {
         const int64_t na = static_cast<int64_t>(aggregates.size());
-        std::vector<double> pair(2 * static_cast<std::size_t>(na));  // (rho x, rho) per aggregate
-        for (int64_t a = 0; a < na; ++a) {
-            pair[2 * a] = coarse_surface.density[a] * coarse[a];
-            pair[2 * a + 1] = coarse_surface.density[a];
+        const std::vector<double> c = heat_coefficients(std::min(std::pow(reach / coarse_edge, 2.0), kMaxIterations), tolerance);
+        // The filtered density is the same every part: filtered once, on the first return.
+        if (coarse_surface.filtered_density.empty()) {
+            coarse_surface.filtered_density = coarse_surface.density;
+            report.coarse_applications += aggregate_chebyshev(coarse_surface.filtered_density, 1, aggregates, {}, c, threads);
         }
-        report.coarse_applications += aggregate_chebyshev(
-            pair, 2, aggregates, {}, heat_coefficients(std::min(std::pow(reach / coarse_edge, 2.0), kMaxIterations), tolerance), threads);
+        std::vector<double> mass(static_cast<std::size_t>(na));  // rho x per aggregate
+        for (int64_t a = 0; a < na; ++a) mass[a] = coarse_surface.density[a] * coarse[a];
+        report.coarse_applications += aggregate_chebyshev(mass, 1, aggregates, {}, c, threads);
         for (int64_t a = 0; a < na; ++a)
-            if (pair[2 * a + 1] > 0.0) coarse[a] = std::min(std::max(pair[2 * a] / pair[2 * a + 1], lowest), highest);
+            if (coarse_surface.filtered_density[a] > 0.0)
+                coarse[a] = std::min(std::max(mass[a] / coarse_surface.filtered_density[a], lowest), highest);
     }
     // (1 - d^2 / (2 cell)^2)^2: smooth, zero two cells away, and the same bits with any maths library.
     const double falloff = 1.0 / (4.0 * cell * cell);
@@ -518,7 +544,7 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     const double local_scale = (settings.local_scale > 0.0 ? settings.local_scale : kLocalScale) * radius;
     const double return_iterations = std::min(std::pow(local_scale / report.edge, 2.0), kMaxIterations);
     const double tolerance = settings.return_tolerance > 0.0 ? settings.return_tolerance : kReturnTolerance;
-    std::vector<float> before, offset, normals, areas;
+    std::vector<float> before, offset, normals, areas, per_triangle;
     if (settings.local_return) offset.resize(static_cast<std::size_t>(nv));
     // Aggregates for the return's low-pass when the mesh is fine (built once, from the first part's surface: the parts
     // move vertices by a fraction of a cell).
@@ -542,7 +568,9 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
         report.seconds_flow += seconds_since(mark);
         if (!settings.local_return) continue;
         // The part's normal displacement, low-passed over the surface, goes back along the normals.
-        normals_and_areas(mesh, adjacency, normals, areas, threads);  // of a smoothed surface: smooth enough as they are
+        // Of a smoothed surface: smooth enough as they are. The areas only for the aggregates' centres (built once).
+        const bool build_aggregates = coarse_return && part == 0;
+        vertex_normals(mesh, adjacency, normals, build_aggregates ? &areas : nullptr, per_triangle, threads);
         parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
             for (int64_t i = begin; i < end; ++i) {
                 float d = 0.0f;
@@ -550,14 +578,15 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
                 offset[i] = d;
             }
         });
-        if (coarse_return && part == 0) {
-            aggregates = return_aggregates(mesh, adjacency, cell, threads);
+        if (build_aggregates) {
+            aggregates = return_aggregates(mesh, adjacency, areas, cell, threads);
+            areas = std::vector<float>();
             report.aggregates = aggregates.aggregates.size();
             coarse_return = report.aggregates > 0;  // none: the scene spans too many cells for the keys
         }
         if (coarse_return) {
             report.applications +=
-                aggregate_low_pass(offset, mesh, return_rows, return_steps, aggregates, areas, cell, local_scale, tolerance, report.edge, threads,
+                aggregate_low_pass(offset, mesh, return_rows, return_steps, aggregates, cell, local_scale, tolerance, report.edge, threads,
                                    report, workspace);
         } else {
             report.applications += chebyshev_filter(offset, 1, return_rows, return_steps, return_iterations, tolerance, threads, nullptr, workspace);
@@ -577,7 +606,7 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     workspace = HeatFilterWorkspace{};
     flow_rows = UmbrellaRows{}, return_rows_at_walls = UmbrellaRows{};
     flow_steps = std::vector<float>(), return_steps = std::vector<float>();
-    before = std::vector<float>();
+    before = std::vector<float>(), per_triangle = std::vector<float>();
     if (settings.volume_correction) {
         // Along smoothed normals (offsets along raw vertex normals would print the triangulation's noise back in);
         // the offsets are tiny, so these normals are the output's normals too.

@@ -43,9 +43,12 @@ constexpr double kReferenceCube = 0.5;
 // The reach of 64 explicit iterations at c = 0.5 (sqrt(64) x the RMS edge of a decimated marching-cubes mesh, 1.07
 // cube edges, 1.05-1.09 on the shared frames at c = 0.25-1.0): the setting the README's figures were measured with.
 constexpr double kMeasuredReach = 8.0 * 1.07 * kReferenceCube;
-// Largest heat time of one part of the flow, in r^2 (a tube of radius 1.5 r keeps most of its radius within one
-// part, so the local return finds it).
-constexpr double kPartTime = 2.5;
+// Largest heat time of one part of the flow, in r^2. Within a part the flow thins a tube's necks faster than its
+// bulges (a 1.5 r tube keeps ~40 % of its radius after 2.3 r^2, ~65 % after 1.25 r^2) and the return gives back the
+// mean, so long parts grow beads on thin tubes: hilbert2's hfL at c = 0.5 / 0.75 / 1.0 is 0.189 / 0.148 / 0.150 with
+// 2.5 r^2, 0.151 / 0.114 / 0.102 with 1.25 and 0.134 / 0.095 / 0.076 with 0.625, slope flicker the same. 1.25 doubles
+// the returns of 2.5 at about the old cost (returns made cheaper with it); 0.625 would cost ~0.8 s more at 1 M.
+constexpr double kPartTime = 1.25;
 // Reach of the low-pass of the normal displacement that is returned after each part, in r. Smaller returns the
 // particles' bumps and the pools' waves too (slope flicker at c = 0.5, reach 4.3 r: 0.060 / 0.055 / 0.054 at 6 / 9 /
 // 12 r; the research measured 1 r returning every bump), larger returns a tube's shrinkage less locally (hilbert2's

@@ -1,5 +1,7 @@
 #include "post/surface_aggregates.h"
 
+#include <type_traits>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -183,31 +185,39 @@ int aggregate_chebyshev(std::vector<double>& x, int dims, const SurfaceAggregate
         return 0;
     }
     // y = Y t_in; FIRST: t_out = y, else t_out = 2 y - t_out (the older term, read first); acc += c_k t_out.
-    auto term = [&](const std::vector<double>& in, std::vector<double>& older_out, std::vector<double>& acc, double ck, bool first) {
+    // DIMS a compile-time count: the inner loops unroll (the same operations in the same order as a runtime count).
+    auto term = [&](auto dims_constant, const std::vector<double>& in, std::vector<double>& older_out, std::vector<double>& acc, double ck,
+                    bool first) {
+        constexpr int DIMS = decltype(dims_constant)::value;
         parallel_blocks(count, threads, 1024, [&](int64_t begin, int64_t end) {
             for (int64_t a = begin; a < end; ++a) {
-                double s[3] = {0.0, 0.0, 0.0}, total = 0.0;
+                double s[DIMS] = {}, total = 0.0;
                 for (int64_t k = g.neighbours.begin(a); k < g.neighbours.end(a); ++k) {
                     const int64_t b = g.neighbours.items[k];
                     total += g.coupling[k];
-                    for (int d = 0; d < dims; ++d) s[d] += g.coupling[k] * in[dims * b + d];
+                    for (int d = 0; d < DIMS; ++d) s[d] += g.coupling[k] * in[DIMS * b + d];
                 }
                 const double w = total > 0.0 ? (weights.empty() ? 1.0 : weights[a]) : 0.0;
-                for (int d = 0; d < dims; ++d) {
-                    const double own = in[dims * a + d];
+                for (int d = 0; d < DIMS; ++d) {
+                    const double own = in[DIMS * a + d];
                     const double y = w > 0.0 ? own + w * (s[d] / total - own) : own;
-                    const double value = first ? y : 2.0 * y - older_out[dims * a + d];
-                    older_out[dims * a + d] = value;
-                    acc[dims * a + d] += ck * value;
+                    const double value = first ? y : 2.0 * y - older_out[DIMS * a + d];
+                    older_out[DIMS * a + d] = value;
+                    acc[DIMS * a + d] += ck * value;
                 }
             }
         });
     };
+    auto apply_term = [&](const std::vector<double>& in, std::vector<double>& older_out, std::vector<double>& acc, double ck, bool first) {
+        if (dims == 1) term(std::integral_constant<int, 1>{}, in, older_out, acc, ck, first);
+        else if (dims == 2) term(std::integral_constant<int, 2>{}, in, older_out, acc, ck, first);
+        else term(std::integral_constant<int, 3>{}, in, older_out, acc, ck, first);
+    };
     std::vector<double> older = x, current(x.size()), acc(x.size());
     for (std::size_t i = 0; i < x.size(); ++i) acc[i] = c[0] * x[i];
-    term(older, current, acc, c[1], true);
+    apply_term(older, current, acc, c[1], true);
     for (int k = 2; k <= degree; ++k) {
-        term(current, older, acc, c[static_cast<std::size_t>(k)], false);
+        apply_term(current, older, acc, c[static_cast<std::size_t>(k)], false);
         older.swap(current);
     }
     x.swap(acc);
