@@ -1,10 +1,9 @@
 #include "post/surface_aggregates.h"
 
-#include <type_traits>
-
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <type_traits>
 
 #include "base/disjoint_sets.h"
 #include "base/errors.h"
