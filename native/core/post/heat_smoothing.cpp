@@ -282,33 +282,29 @@ void correct_component_volumes(TriMesh& mesh, const std::vector<int32_t>& labels
 
 
 // Unit area-weighted vertex normals and, when `areas` is given, vertex areas (a third of the incident triangles'
-// areas). Every part's return needs the normals: each triangle's cross product is computed once into per_triangle
-// (3 floats per triangle, kept by the caller across parts), not once per corner.
+// areas). Every part's return needs them: float cross products (the normals only set the return's direction, and the
+// edges of one triangle are of one size), per corner, so that no per-triangle buffer raises the memory peak.
 void vertex_normals(const TriMesh& mesh, const MeshAdjacency& adjacency, std::vector<float>& normals, std::vector<float>* areas,
-                    std::vector<float>& per_triangle, int threads) {
-    const int64_t nv = static_cast<int64_t>(mesh.num_vertices()), nt = static_cast<int64_t>(mesh.num_triangles());
+                    int threads) {
+    const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
     const CsrList& vt = adjacency.vertex_triangles;
     normals.resize(mesh.vertices.size());
     if (areas) areas->resize(static_cast<std::size_t>(nv));
-    per_triangle.resize(3 * static_cast<std::size_t>(nt));
-    // Float cross products: the normals only set the return's direction, and the edges of one triangle are of one size.
-    parallel_blocks(nt, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t f = begin; f < end; ++f) {
-            const int32_t* t = mesh.triangles.data() + 3 * f;
-            const float *a = &mesh.vertices[3 * static_cast<int64_t>(t[0])], *b = &mesh.vertices[3 * static_cast<int64_t>(t[1])],
-                        *c = &mesh.vertices[3 * static_cast<int64_t>(t[2])];
-            const float u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-            const float w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-            float* n = per_triangle.data() + 3 * f;
-            n[0] = u[1] * w[2] - u[2] * w[1], n[1] = u[2] * w[0] - u[0] * w[2], n[2] = u[0] * w[1] - u[1] * w[0];
-            if (!std::isfinite(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])) n[0] = n[1] = n[2] = 0.0f;
-        }
-    });
+    const float* x = mesh.vertices.data();
+    auto cross = [&](int64_t f, float n[3]) {
+        const int32_t* t = mesh.triangles.data() + 3 * f;
+        const float *a = x + 3 * static_cast<int64_t>(t[0]), *b = x + 3 * static_cast<int64_t>(t[1]), *c = x + 3 * static_cast<int64_t>(t[2]);
+        const float u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+        const float w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        n[0] = u[1] * w[2] - u[2] * w[1], n[1] = u[2] * w[0] - u[0] * w[2], n[2] = u[0] * w[1] - u[1] * w[0];
+        if (!std::isfinite(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])) n[0] = n[1] = n[2] = 0.0f;
+    };
     parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t v = begin; v < end; ++v) {
             double sum[3] = {0.0, 0.0, 0.0}, area = 0.0;
             for (int64_t k = vt.begin(v); k < vt.end(v); ++k) {
-                const float* n = per_triangle.data() + 3 * static_cast<int64_t>(vt.items[k]);
+                float n[3];
+                cross(vt.items[k], n);
                 sum[0] += n[0], sum[1] += n[1], sum[2] += n[2];
                 if (areas) area += std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]) / 6.0;
             }
@@ -317,7 +313,8 @@ void vertex_normals(const TriMesh& mesh, const MeshAdjacency& adjacency, std::ve
                 double largest_norm = 0.0;
                 sum[0] = 0.0, sum[1] = 0.0, sum[2] = 1.0;
                 for (int64_t k = vt.begin(v); k < vt.end(v); ++k) {
-                    const float* n = per_triangle.data() + 3 * static_cast<int64_t>(vt.items[k]);
+                    float n[3];
+                    cross(vt.items[k], n);
                     const double norm2 = double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2];
                     if (norm2 > largest_norm) largest_norm = norm2, sum[0] = n[0], sum[1] = n[1], sum[2] = n[2];
                 }
@@ -544,7 +541,7 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     const double local_scale = (settings.local_scale > 0.0 ? settings.local_scale : kLocalScale) * radius;
     const double return_iterations = std::min(std::pow(local_scale / report.edge, 2.0), kMaxIterations);
     const double tolerance = settings.return_tolerance > 0.0 ? settings.return_tolerance : kReturnTolerance;
-    std::vector<float> before, offset, normals, areas, per_triangle;
+    std::vector<float> before, offset, normals, areas;
     if (settings.local_return) offset.resize(static_cast<std::size_t>(nv));
     // Aggregates for the return's low-pass when the mesh is fine (built once, from the first part's surface: the parts
     // move vertices by a fraction of a cell).
@@ -570,7 +567,7 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
         // The part's normal displacement, low-passed over the surface, goes back along the normals.
         // Of a smoothed surface: smooth enough as they are. The areas only for the aggregates' centres (built once).
         const bool build_aggregates = coarse_return && part == 0;
-        vertex_normals(mesh, adjacency, normals, build_aggregates ? &areas : nullptr, per_triangle, threads);
+        vertex_normals(mesh, adjacency, normals, build_aggregates ? &areas : nullptr, threads);
         parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
             for (int64_t i = begin; i < end; ++i) {
                 float d = 0.0f;
@@ -606,7 +603,7 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     workspace = HeatFilterWorkspace{};
     flow_rows = UmbrellaRows{}, return_rows_at_walls = UmbrellaRows{};
     flow_steps = std::vector<float>(), return_steps = std::vector<float>();
-    before = std::vector<float>(), per_triangle = std::vector<float>();
+    before = std::vector<float>();
     if (settings.volume_correction) {
         // Along smoothed normals (offsets along raw vertex normals would print the triangulation's noise back in);
         // the offsets are tiny, so these normals are the output's normals too.
