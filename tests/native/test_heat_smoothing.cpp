@@ -200,6 +200,14 @@ TEST_CASE("heat smoothing: the part time sets how often the return runs, not wha
     }
     CHECK(parts[0] == 4);
     CHECK(parts[1] == 2);
+    {  // a part time that would split the flow into millions of parts is refused, naming it
+        TriMesh m = base;
+        HeatSmoothingSettings s;
+        s.reach = 4 * kRadius;
+        s.particle_radius = kRadius;
+        s.part_time = 1e-9;
+        CHECK_THROWS_WITH(heat_smooth(m, adjacency, {}, s, 2), Catch::Matchers::Contains("part_time"));
+    }
     double largest = 0.0, moved = 0.0;
     for (std::size_t i = 0; i < base.vertices.size(); ++i) {
         largest = std::max(largest, std::fabs(double(out[0].vertices[i]) - out[1].vertices[i]));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <cmath>
 #include <string>
@@ -224,6 +225,9 @@ int chebyshev_filter(std::vector<float>& x, int dims, const UmbrellaRows& rows, 
     return frozen ? chebyshev_apply<1, true>(x, rows, steps, frozen, c, threads, workspace)
                   : chebyshev_apply<1, false>(x, rows, steps, nullptr, c, threads, workspace);
 }
+
+// Most parts the research knob part_time may split the flow into.
+constexpr int kMaxParts = 10000;
 
 void apply_walls(const WallConstraints* walls, TriMesh& mesh) {
     if (walls && !walls->empty()) walls->apply(mesh.vertices.data(), mesh.num_vertices());
@@ -531,8 +535,17 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     if (!(report.edge > 0.0)) return report;
     report.iterations = std::min((settings.reach / report.edge) * (settings.reach / report.edge), kMaxIterations);
     const double time = 0.25 * settings.reach * settings.reach;
-    report.parts = settings.parts > 0 ? settings.parts
-                                      : std::max(1, static_cast<int>(std::ceil(time / ((settings.part_time > 0.0 ? settings.part_time : kPartTime) * radius * radius) - 0.05)));
+    const double part_time = settings.part_time > 0.0 ? settings.part_time : kPartTime;
+    const double automatic_parts = std::ceil(time / (part_time * radius * radius) - 0.05);
+    // The research knob: a part time far below the heat time would run a filter and a return over the whole mesh for
+    // hours (and overflow the count).
+    if (settings.parts <= 0 && settings.part_time > 0.0 && !(automatic_parts <= kMaxParts)) {
+        char text[160];
+        std::snprintf(text, sizeof text, "heat_smooth: part_time %g r^2 splits the heat time %g r^2 into more than %d parts",
+                      settings.part_time, time / (radius * radius), kMaxParts);
+        throw InputError(text);
+    }
+    report.parts = settings.parts > 0 ? settings.parts : std::max(1, static_cast<int>(automatic_parts));
 
     auto mark = std::chrono::steady_clock::now();
     if (settings.volume_correction && unsmoothed.labels.size() != mesh.num_vertices())
