@@ -150,12 +150,11 @@ def test_shorter_parts_keep_fewer_beads_on_thin_tubes(hilbert2):
     # (8 parts, the part time before), 0.102 with today's 1.25 r^2 (15 parts).
     raw = meniscus.reconstruct(hilbert2, R, cube_size=1.0, smoothing_iterations=0, output_weights=True, normals=False)
     v, t = np.ascontiguousarray(raw.vertices, np.float32), np.ascontiguousarray(raw.triangles, np.int32)
-    passes = int(round(1.36 * (2 * R / _core.mean_edge_length(v, t)) ** 2))
     hfl, parts = [], []
     for part_time in (2.5, 0.0):  # 0: the default
         out, info = _core.heat_smooth(v, t, raw.attributes["weights"], reach=2 * REACH * R, particle_radius=R,
                                       part_time=part_time)
-        hfl.append(_core.taubin_distance(np.ascontiguousarray(out, np.float32), t, passes))
+        hfl.append(meniscus.assess_quality(meniscus.Mesh(out, t), particle_radius=R, raw=raw)["hfl_ratio"])
         parts.append(info["parts"])
     assert parts[1] >= 1.8 * parts[0]
     assert hfl[1] < 0.8 * hfl[0]
