@@ -12,7 +12,6 @@
 #include "base/numbers.h"
 #include "base/parallel.h"
 #include "mesh/adjacency.h"
-#include "mesh/components.h"
 #include "post/container.h"
 #include "post/normals.h"
 #include "post/surface_aggregates.h"
@@ -232,58 +231,6 @@ constexpr int kMaxParts = 10000;
 void apply_walls(const WallConstraints* walls, TriMesh& mesh) {
     if (walls && !walls->empty()) walls->apply(mesh.vertices.data(), mesh.num_vertices());
 }
-
-// Newton steps along the vertex normals (in mesh.normals), offsets s_c * amount_i, until each component's volume is
-// its target (capped at max_offset); walls applied after each step. Four at most: vertices on a wall move along it
-// only, which slows the convergence (three left a sphere pressed onto a wall 1.0e-4 off its volume).
-void correct_component_volumes(TriMesh& mesh, const std::vector<int32_t>& labels, const std::vector<double>& target,
-                               const std::vector<float>& amount, double max_offset, const WallConstraints* walls, int threads) {
-    const int32_t count = static_cast<int32_t>(target.size());
-    if (count == 0 || mesh.num_triangles() == 0) return;
-    std::vector<double> applied(static_cast<std::size_t>(count), 0.0);
-    const int32_t* tris = mesh.triangles.data();
-    for (int step = 0; step < 4; ++step) {
-        const std::vector<double> volume = component_volumes(mesh, labels, count, threads);
-        bool converged = true;
-        for (int32_t c = 0; c < count && converged; ++c) converged = std::fabs(target[c] - volume[c]) <= 1e-5 * std::fabs(target[c]);
-        if (converged) break;
-        // d volume / d s = sum_i amount_i A_i (A_i a third of the incident triangles' areas).
-        const std::vector<double> rate = sum_per_component(mesh, labels, count, threads, [&](int64_t t) {
-            const int32_t* tri = tris + 3 * t;
-            const float *a = &mesh.vertices[3 * static_cast<std::size_t>(tri[0])], *b = &mesh.vertices[3 * static_cast<std::size_t>(tri[1])],
-                        *c = &mesh.vertices[3 * static_cast<std::size_t>(tri[2])];
-            const double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
-            const double v[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
-            const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-            const double third = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / 6.0;
-            double sum = 0.0;
-            for (int i = 0; i < 3; ++i) sum += third * (amount.empty() ? 1.0 : double(amount[tri[i]]));
-            return sum;
-        });
-        std::vector<double> offset(static_cast<std::size_t>(count), 0.0);
-        bool any = false;
-        for (int32_t c = 0; c < count; ++c) {
-            if (!(rate[c] > 0.0)) continue;
-            double s = (target[c] - volume[c]) / rate[c];
-            s = std::min(std::max(applied[c] + s, -max_offset), max_offset) - applied[c];
-            if (!std::isfinite(s)) continue;
-            applied[c] += s;
-            offset[c] = s;
-            any = any || s != 0.0;
-        }
-        if (!any) break;
-        parallel_blocks(static_cast<int64_t>(mesh.num_vertices()), threads, kBlock, [&](int64_t begin, int64_t end) {
-            for (int64_t v = begin; v < end; ++v) {
-                const double s = offset[labels[v]] * (amount.empty() ? 1.0 : double(amount[v]));
-                if (s == 0.0) continue;
-                for (int k = 0; k < 3; ++k)
-                    mesh.vertices[3 * v + k] = static_cast<float>(mesh.vertices[3 * v + k] + s * mesh.normals[3 * v + k]);
-            }
-        });
-        apply_walls(walls, mesh);
-    }
-}
-
 
 // Unit area-weighted vertex normals and, when `areas` is given, vertex areas (a third of the incident triangles'
 // areas). Every part's return needs them: float cross products (the normals only set the return's direction, and the
@@ -620,13 +567,9 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     if (settings.volume_correction) {
         // Along smoothed normals (offsets along raw vertex normals would print the triangulation's noise back in);
         // the offsets are tiny, so these normals are the output's normals too.
-        mesh.normals = area_weighted_normals(mesh, adjacency.vertex_triangles, threads);
-        smooth_normals(mesh.normals, adjacency.vertex_neighbours, settings.normal_iterations, threads);
-        correct_component_volumes(mesh, unsmoothed.labels, unsmoothed.volumes, weights,
-                                  settings.max_offset > 0.0 ? settings.max_offset : 4.0 * radius, walls, threads);
-        report.normals.values = std::move(mesh.normals);
-        report.normals.iterations = settings.normal_iterations;
-        mesh.normals.clear();
+        report.normals = restore_component_volumes(mesh, adjacency, unsmoothed, weights,
+                                                   settings.max_offset > 0.0 ? settings.max_offset : 4.0 * radius,
+                                                   settings.normal_iterations, threads, walls, 4);
     }
     report.seconds_correction += seconds_since(mark);
     return report;

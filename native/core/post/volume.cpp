@@ -51,9 +51,9 @@ UnsmoothedSurface record_unsmoothed_surface(const TriMesh& mesh, int threads) {
 
 SmoothedNormals restore_component_volumes(TriMesh& mesh, const MeshAdjacency& adjacency, const UnsmoothedSurface& unsmoothed,
                                           const std::vector<float>& amount, double max_offset, int normal_iterations, int threads,
-                                          const WallConstraints* walls) {
+                                          const WallConstraints* walls, int newton_steps) {
     // Smoothed normals: offsets along raw vertex normals would print the triangulation's noise back in. The offsets
-    // are small against the features, so the directions computed once serve both Newton steps. Computed before
+    // are small against the features, so the directions computed once serve every Newton step. Computed before
     // anything else, since the normals stage takes them even when there is nothing to restore.
     SmoothedNormals normals{area_weighted_normals(mesh, adjacency.vertex_triangles, threads), normal_iterations};
     smooth_normals(normals.values, adjacency.vertex_neighbours, normal_iterations, threads);
@@ -61,13 +61,10 @@ SmoothedNormals restore_component_volumes(TriMesh& mesh, const MeshAdjacency& ad
     const int32_t count = unsmoothed.components;
     if (count == 0 || mesh.num_triangles() == 0) return normals;
     std::vector<double> applied(static_cast<std::size_t>(count), 0.0);
-    // Volume is close to linear in the offset for offsets small against the feature size: two Newton steps
-    // bring it within a small fraction of a percent.
-    for (int step = 0; step < 2; ++step) {
+    for (int step = 0; step < newton_steps; ++step) {
         const std::vector<double> volume = component_volumes(mesh, unsmoothed.labels, count, threads);
-        // After the first step the volume is usually within a few millionths: then a second step changes nothing
-        // worth its two passes over the mesh.
-        bool converged = step > 0;
+        // Within a few millionths (usually after the first step): a further step changes nothing worth its passes.
+        bool converged = true;
         for (int32_t c = 0; c < count && converged; ++c)
             converged = std::fabs(target[c] - volume[c]) <= 1e-5 * std::fabs(target[c]);
         if (converged) break;
@@ -75,10 +72,11 @@ SmoothedNormals restore_component_volumes(TriMesh& mesh, const MeshAdjacency& ad
         std::vector<double> offset(static_cast<std::size_t>(count), 0.0);
         bool any = false;
         for (int32_t c = 0; c < count; ++c) {
-            if (rate[c] <= 0.0) continue;
+            if (!(rate[c] > 0.0)) continue;
             double s = (target[c] - volume[c]) / rate[c];
             // Cap the accumulated offset: a component that smoothing collapsed is not blown back up from nothing.
             s = std::min(std::max(applied[c] + s, -max_offset), max_offset) - applied[c];
+            if (!std::isfinite(s)) continue;
             applied[c] += s;
             offset[c] = s;
             any = any || s != 0.0;

@@ -28,12 +28,14 @@ UnsmoothedSurface record_unsmoothed_surface(const TriMesh& mesh, int threads);
 
 // Moves vertices along their smoothed area-weighted normals (normal_iterations of Eq. 12, computed once on the
 // smoothed surface) by s_c * amount_i so that component c's volume returns to its unsmoothed volume; amount empty
-// means 1 everywhere. |s_c| is capped at max_offset. Two Newton steps at most. Returns the normals it moved along:
-// the offsets are tiny against the edge lengths, so they are the restored surface's normals too. With walls,
-// vertices on a container's wall move along it only.
+// means 1 everywhere. |s_c| is capped at max_offset. At most newton_steps Newton steps, until every component is within
+// 1e-5 of its volume. Returns the normals it moved along: the offsets are tiny against the edge lengths, so they are
+// the restored surface's normals too. With walls, applied after every step, vertices on a container's wall end on it.
+// The heat flow's final correction (post/heat_smoothing.h) is this with 4 steps: its wall vertices move too and are
+// put back on the wall, which slows the convergence (3 left a sphere pressed onto a wall 1.0e-4 off its volume).
 SmoothedNormals restore_component_volumes(TriMesh& mesh, const MeshAdjacency& adjacency, const UnsmoothedSurface& unsmoothed,
                                           const std::vector<float>& amount, double max_offset, int normal_iterations, int threads,
-                                          const WallConstraints* walls = nullptr);
+                                          const WallConstraints* walls = nullptr, int newton_steps = 2);
 
 // The smoothing iterations of the normals restoration moves along: the output's own when it asks for smoothed
 // area-weighted normals (so that the normals stage can take them as they are), otherwise 10.
