@@ -504,7 +504,7 @@ PYBIND11_MODULE(_core, m) {
         info["coarse_applications"] = report.coarse_applications;
         info["aggregates"] = report.aggregates;
         info["coarse_edge"] = report.coarse_edge;
-        info["seconds"] = py::dict(py::arg("components") = report.seconds_components, py::arg("flow") = report.seconds_flow,
+        info["seconds"] = py::dict(py::arg("flow") = report.seconds_flow,
                                    py::arg("return") = report.seconds_return, py::arg("correction") = report.seconds_correction);
         const py::ssize_t n = static_cast<py::ssize_t>(mesh.num_vertices());
         return py::make_tuple(to_numpy(std::move(mesh.vertices), {n, 3}), info);

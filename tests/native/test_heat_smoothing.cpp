@@ -9,6 +9,7 @@
 
 #include "analysis/quality.h"
 #include "analysis/scale_metrics.h"
+#include "base/errors.h"
 #include "base/numbers.h"
 #include "mesh/adjacency.h"
 #include "mesh/components.h"
@@ -217,6 +218,53 @@ TEST_CASE("heat smoothing: the part time sets how often the return runs, not wha
     CHECK(moved > 0.05 * kRadius);
     CHECK(largest < 0.01 * moved);
 }
+TEST_CASE("heat smoothing refuses what it cannot run and names it", "[heat]") {
+    const TriMesh base = make_noisy_sphere(2, 1.0, 0.03);
+    const MeshAdjacency adjacency = build_adjacency(base, 2);
+    auto settings = [] {
+        HeatSmoothingSettings s;
+        s.reach = 0.4;
+        s.particle_radius = 0.1;
+        return s;
+    };
+    auto refusal = [&](const HeatSmoothingSettings& s, const MeshAdjacency& a) {
+        TriMesh m = base;
+        try {
+            heat_smooth(m, a, {}, s, 2);
+        } catch (const InputError& e) {
+            CHECK(m.vertices == base.vertices);  // refused before anything moved
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    {  // a reach whose default parts would number in the tens of thousands (the pipeline's grows with the cube)
+        HeatSmoothingSettings s = settings();
+        s.reach = 40.0;
+        CHECK_THAT(refusal(s, adjacency), Catch::Matchers::Contains("reach of 400 r") && Catch::Matchers::Contains("shorter smoothing reach"));
+        s = settings();
+        s.parts = 20000;
+        CHECK_THAT(refusal(s, adjacency), Catch::Matchers::Contains("20000 parts"));
+    }
+    {  // a container wall that is not a number
+        WallConstraints walls;
+        walls.mask.assign(base.num_vertices(), 0);
+        walls.mask[0] = 1u << 4;
+        walls.planes = {-9, 9, -9, 9, std::nanf(""), 9};
+        HeatSmoothingSettings s = settings();
+        s.walls = &walls;
+        CHECK_THAT(refusal(s, adjacency), Catch::Matchers::Contains("min z wall"));
+    }
+    {  // an adjacency without the triangles around each vertex (the returns' normals read them)
+        MeshAdjacency neighbours_only;
+        neighbours_only.vertex_neighbours = adjacency.vertex_neighbours;
+        CHECK_THAT(refusal(settings(), neighbours_only), Catch::Matchers::Contains("heat_smooth"));
+    }
+    // A filter of more equivalent iterations than it runs (the coefficients alone cost O(N)).
+    std::vector<float> x = base.vertices;
+    CHECK_THROWS_WITH(heat_filter(x, 3, adjacency, {}, INFINITY, 1e-3, 2), Catch::Matchers::Contains("equivalent iterations"));
+    CHECK_THROWS_AS(heat_coefficients(std::nan(""), 1e-3), InputError);
+}
+
 TEST_CASE("heat smoothing: the same physical surface at c = 0.25 and c = 0.5 (particles)", "[heat][slow]") {
     const std::vector<float> p = scene(false, false);
     double heat_abs[2], raw_abs[2], hfl_ratio[2], hfl_abs[2];

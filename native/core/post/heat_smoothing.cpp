@@ -180,7 +180,8 @@ int chebyshev_apply(std::vector<float>& x, const UmbrellaRows& rows, const std::
         for (int d = 0; d < D; ++d) centre[d] = 0.5f * lo[d] + 0.5f * hi[d];
     }
     // Every element of the three is written before it is read: resizing a reused buffer needs no clearing. One float
-    // more in the two the stencil reads: the last vertex's 4-lane load (load_float4).
+    // more in the two the stencil reads, for the last vertex's 4-lane load (load_float4): never written by the filter
+    // (zero when the buffer grew, or an older value), and its lane is dropped.
     std::vector<float>& older = workspace.older;
     std::vector<float>& current = workspace.current;
     std::vector<float>& acc = workspace.sum;
@@ -225,11 +226,19 @@ int chebyshev_filter(std::vector<float>& x, int dims, const UmbrellaRows& rows, 
                   : chebyshev_apply<1, false>(x, rows, steps, nullptr, c, threads, workspace);
 }
 
-// Most parts the research knob part_time may split the flow into.
+// Most parts the flow may run in (each a filter and a return over the whole mesh).
 constexpr int kMaxParts = 10000;
 
 void apply_walls(const WallConstraints* walls, TriMesh& mesh) {
     if (walls && !walls->empty()) walls->apply(mesh.vertices.data(), mesh.num_vertices());
+}
+
+void require_valid_walls(const WallConstraints& walls, std::size_t vertex_count) {
+    if (walls.mask.size() != vertex_count) throw InputError("heat_smooth: the wall mask does not belong to this mesh");
+    static const char* const kFaces[6] = {"min x", "max x", "min y", "max y", "min z", "max z"};
+    for (int f = 0; f < 6; ++f)
+        if (!std::isfinite(walls.planes[static_cast<std::size_t>(f)]))
+            throw InputError(std::string("heat_smooth: the container's ") + kFaces[f] + " wall is not a finite number");
 }
 
 // Unit area-weighted vertex normals and, when `areas` is given, vertex areas (a third of the incident triangles'
@@ -370,7 +379,8 @@ int aggregate_low_pass(std::vector<float>& value, const TriMesh& mesh, const Umb
             value[i] = static_cast<float>(total > 0.0 ? sum / total : coarse[own]);
         }
     });
-    return chebyshev_filter(value, 1, rows, steps, std::pow(0.5 * cell / edge, 2.0), tolerance, threads, nullptr, workspace);
+    return chebyshev_filter(value, 1, rows, steps, std::min(std::pow(0.5 * cell / edge, 2.0), kMaxIterations), tolerance, threads, nullptr,
+                            workspace);
 }
 
 }  // namespace
@@ -406,6 +416,11 @@ double rms_edge_length(const TriMesh& mesh, const MeshAdjacency& adjacency, int 
 }
 
 std::vector<double> heat_coefficients(double n, double tolerance) {
+    if (std::isnan(n) || n > kMaxIterations) {  // the coefficients cost O(N) time and memory
+        char text[128];
+        std::snprintf(text, sizeof text, "heat filter: %g equivalent iterations, more than the %g it runs", n, kMaxIterations);
+        throw InputError(text);
+    }
     if (!(n > 0.0)) return {1.0};
     // The coefficients of exp(N (y - 1)) (2 e^-N I_k(N), positive) decay like exp(-k^2 / (2 N)).
     const int max_degree = static_cast<int>(std::ceil(std::sqrt(2.0 * n * 12.0))) + 8;
@@ -448,6 +463,7 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     HeatSmoothingReport report;
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
     if (adjacency.vertex_neighbours.rows() != mesh.num_vertices()) throw InputError("heat_smooth: the adjacency does not belong to this mesh");
+    require_row_per_vertex(adjacency.vertex_triangles, mesh.num_vertices(), "heat_smooth");  // the returns' normals read them
     if (!weights_in.empty() && weights_in.size() != mesh.num_vertices())
         throw InputError("heat_smooth: got " + std::to_string(weights_in.size()) + " weights for " + std::to_string(nv) + " vertices");
     if (!(settings.reach > 0.0) || nv == 0) return report;
@@ -466,7 +482,7 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     // it would otherwise pull it down the wall.
     MeshAdjacency along_walls;
     if (walls) {
-        if (walls->mask.size() != mesh.num_vertices()) throw InputError("heat_smooth: the wall mask does not belong to this mesh");
+        require_valid_walls(*walls, mesh.num_vertices());
         along_walls.vertex_neighbours = smoothing_neighbours_at_walls(*walls, adjacency.vertex_neighbours);
         frozen.resize(walls->mask.size());
         for (std::size_t v = 0; v < frozen.size(); ++v) {
@@ -483,13 +499,22 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     report.iterations = std::min((settings.reach / report.edge) * (settings.reach / report.edge), kMaxIterations);
     const double time = 0.25 * settings.reach * settings.reach;
     const double part_time = settings.part_time > 0.0 ? settings.part_time : kPartTime;
+    // Up to 5 % over part_time in one part: a heat time just above a multiple of it does not add a part.
     const double automatic_parts = std::ceil(time / (part_time * radius * radius) - 0.05);
-    // The research knob: a part time far below the heat time would run a filter and a return over the whole mesh for
-    // hours (and overflow the count).
-    if (settings.parts <= 0 && settings.part_time > 0.0 && !(automatic_parts <= kMaxParts)) {
-        char text[160];
-        std::snprintf(text, sizeof text, "heat_smooth: part_time %g r^2 splits the heat time %g r^2 into more than %d parts",
-                      settings.part_time, time / (radius * radius), kMaxParts);
+    // Each part runs a filter and a return over the whole mesh: a reach far beyond the particles (the pipeline's grows
+    // with the cube size above kReferenceCube) or a tiny part time would run for hours (and overflow the count).
+    if (settings.parts > kMaxParts || (settings.parts <= 0 && !(automatic_parts <= kMaxParts))) {
+        char text[256];
+        if (settings.parts > 0)
+            std::snprintf(text, sizeof text, "heat_smooth: %d parts asked for, more than %d", settings.parts, kMaxParts);
+        else if (settings.part_time > 0.0)
+            std::snprintf(text, sizeof text, "heat_smooth: part_time %g r^2 splits the heat time %g r^2 into more than %d parts",
+                          settings.part_time, time / (radius * radius), kMaxParts);
+        else
+            std::snprintf(text, sizeof text,
+                          "heat_smooth: a reach of %g r (heat time %g r^2) splits the flow into more than %d parts of %g r^2; use a "
+                          "shorter smoothing reach (it grows with the cube size above %g r)",
+                          settings.reach / radius, time / (radius * radius), kMaxParts, part_time, kReferenceCube);
         throw InputError(text);
     }
     report.parts = settings.parts > 0 ? settings.parts : std::max(1, static_cast<int>(automatic_parts));
@@ -577,6 +602,11 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
 
 HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& weights,
                                 const HeatSmoothingSettings& settings, int threads) {
+    // On its walls before it is recorded: a component the guard reverts goes back onto them.
+    if (settings.walls && !settings.walls->empty()) {
+        require_valid_walls(*settings.walls, mesh.num_vertices());
+        apply_walls(settings.walls, mesh);
+    }
     const UnsmoothedSurface unsmoothed = record_unsmoothed_surface(mesh, threads);
     HeatSmoothingReport report = heat_smooth(mesh, adjacency, weights, settings, unsmoothed, threads);
     report.reverted_components = revert_collapsed_components(mesh, unsmoothed, threads);

@@ -5,14 +5,15 @@
 // physical time: the weighted umbrella operator Y = I + W (mean - I) (one beta = 1 Jacobi step; eigenvalues in
 // [-1, 1]) is applied as a Chebyshev expansion of exp(N (y - 1)), N = (reach / e)^2 with e the mesh's RMS edge length.
 // N explicit steps are a heat time N e^2 / 4, so the heat time is reach^2 / 4 at every cube size, for about
-// 4 sqrt(N) operator applications instead of N.
+// 4 sqrt(N x parts) operator applications instead of N (each part is its own series).
 //
-// Local volume: the flow runs in parts of heat time <= kPartTime r^2. After each part the normal component of the
+// Local volume: the flow runs in parts of heat time about kPartTime r^2 (at most 5 % over). After each part the normal component of the
 // part's displacement is low-passed over the surface (reach kLocalScale r) and taken back along the normals. Removing
 // a particle's bump is a displacement of alternating sign and averages out; the shrinkage of a tube, sheet, crest or
 // droplet is of one sign across the feature and is returned where it happened, before it can collapse anything;
-// a gap's widening is returned the same way, so gaps do not close. A final per-component correction (Newton steps
-// along the smoothed normals, scaled by the feature weights) makes each component's volume exact; since nothing has
+// a gap's widening is returned the same way, so gaps do not close. A final per-component correction (up to 4 Newton steps
+// along the smoothed normals, scaled by the feature weights: post/volume.h) brings each component's volume within
+// 1e-5 of the unsmoothed one; since nothing has
 // collapsed, its offsets are of the order of 0.01 r.
 //
 // Walls (wall_constraints.h): a vertex on a wall keeps its coordinate along the wall's normal inside the flow (the
@@ -88,10 +89,10 @@ struct HeatSmoothingSettings {
     double reach = 0.0;             // absolute (scene units): heat time reach^2 / 4
     double particle_radius = 0.0;   // r: the unit of the part time and the local scale
     bool local_return = true;       // return the low-passed normal displacement after each part
-    bool volume_correction = true;  // final exact per-component volume (Newton along the smoothed normals)
+    bool volume_correction = true;  // final per-component volume (Newton along the smoothed normals, within 1e-5)
     int normal_iterations = 10;     // smoothing of the correction's normals (Eq. 12); returned in the report
     double max_offset = 0.0;        // cap of the correction's offset (absolute; 0: 4 r)
-    int parts = 0;                  // 0: automatic (heat time <= part_time r^2 each)
+    int parts = 0;                  // 0: automatic (heat time about part_time r^2 each); at most 10000
     double part_time = 0.0;         // in r^2; 0: kPartTime
     // Research knobs (bench/smoothing_scale.py variants; the pipeline leaves them as they are):
     double return_tolerance = 0.0;  // 0: kReturnTolerance (3e-3 / 1e-2 / 3e-2 measured: flicker 0.0597 / 0.0599 / 0.0606)
@@ -111,8 +112,8 @@ struct HeatSmoothingReport {
     double coarse_edge = 0.0;         // their RMS coupled distance
     SmoothedNormals normals;          // the final correction's smoothed normals (empty without it): output-ready
     std::size_t reverted_components = 0;  // collapsed components given their positions back (the whole stage only)
-    // Seconds spent: components (labels, volumes), flow, local return (normals, low-pass, move), final correction.
-    double seconds_components = 0.0, seconds_flow = 0.0, seconds_return = 0.0, seconds_correction = 0.0;
+    // Seconds spent: flow, local return (normals, low-pass, move), final correction.
+    double seconds_flow = 0.0, seconds_return = 0.0, seconds_correction = 0.0;
 };
 
 // The flow and the final correction towards the volumes of `unsmoothed` (record_unsmoothed_surface of this mesh,
