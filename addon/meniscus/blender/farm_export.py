@@ -4,6 +4,7 @@ folder, so that it plays the farm's meshes as its cache as they arrive. docs/far
 import os
 
 import bpy
+import numpy as np
 from bpy.props import IntProperty, StringProperty
 
 from .. import cache, farm, sequence
@@ -30,7 +31,9 @@ def export_farm_job(obj, bundle_dir, chunk_size=1, meniscus_command="meniscus", 
     first, last = job.tasks[0].frame, job.tasks[-1].frame
     # The input pattern from the files the bake found: the command line resolves it the same way (frame_pattern).
     pattern = sequence.parse_pattern(source[first]).pattern_string()
-    parameters = {name: value for name, value in job.arguments.items() if name in farm.BY_NAME}
+    # Blender keeps reals as 32-bit floats (0.025 is 0.0250000004): the job carries the values as the panel shows them.
+    parameters = {name: float(np.format_float_positional(np.float32(value), unique=True)) if isinstance(value, float) else value
+                  for name, value in job.arguments.items() if name in farm.BY_NAME}
     parameters["threads"] = 0  # the farm host's cores, not this workstation's setting
     try:
         text = farm.parameters_file_text(parameters, input=pattern, output=output, start=first, end=last,
