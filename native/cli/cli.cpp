@@ -2,6 +2,8 @@
 // as the `meniscus` executable (main.cpp) and inside the Python module (`meniscus` console script of the wheel).
 //   meniscus reconstruct INPUT -o OUTPUT -r R [-l L] [-c C] [-t T] [-s S -e E] [--threads N] [--stats FILE] ...
 //   meniscus inspect MESH [--raw RAW] [--json FILE]
+// Farm jobs (Open Job Description bundles, Dask) are written and sent by the Python console script (python/meniscus/
+// farm.py, docs/farm.md); this one runs their tasks: --parameters FILE, --frames A-B, --skip-existing.
 #include "cli.h"
 
 #include <CLI/CLI.hpp>
@@ -23,11 +25,18 @@
 #include <thread>
 #include <vector>
 
+#ifdef _WIN32
+#include <process.h>
+#else
+#include <unistd.h>
+#endif
+
 #include "base/errors.h"
 #include "io/frame_pattern.h"
 #include "io/io.h"
 #include "io/io_util.h"
 #include "base/memory.h"
+#include "parameters_file.h"
 #include "base/parallel.h"
 #include "parameters.h"
 #include "pipeline.h"
@@ -153,6 +162,9 @@ json quality_json(const MeshQuality& q) {
 
 struct ReconstructArgs {
     std::string input, output, output_dir, raw_output, stats_path;
+    std::string parameters_path, save_parameters_path;  // --parameters (read before the flags) and --save-parameters
+    std::string frames;                                  // --frames A-B, the same as -s A -e B (a farm task's chunk)
+    bool skip_existing = false;                          // frames whose output exists are not redone
     Parameters parameters;  // the pipeline's, filled from the schema's flags
     std::optional<long> start, end;
     std::vector<std::string> attributes;
@@ -209,12 +221,16 @@ std::string cli_value_text(const ParameterSpec& spec, double value) {
     return format_number(value);
 }
 
+// The first long name of a schema parameter's flags: -r,--particle-radius -> --particle-radius.
+std::string long_flag(const ParameterSpec& spec) {
+    const std::size_t start = spec.cli.find("--");
+    return spec.cli.substr(start, spec.cli.find(',', start) - start);
+}
+
 // One flag per schema parameter, with its help text, unit, allowed values and default.
 void add_parameter_flags(CLI::App& command, Parameters& parameters) {
     for (const ParameterSpec& spec : parameter_schema()) {
-        // The name messages use: the first long name (-r,--particle-radius -> --particle-radius).
-        const std::size_t long_start = spec.cli.find("--");
-        const std::string flag = spec.cli.substr(long_start, spec.cli.find(',', long_start) - long_start);
+        const std::string flag = long_flag(spec);  // the name messages use
         std::string help = spec.help;
         if (!spec.unit.empty()) help += " [" + spec.unit + "]";
         if (spec.is_vector()) {
@@ -250,10 +266,43 @@ void add_parameter_flags(CLI::App& command, Parameters& parameters) {
             option->description(help + " [default: " + cli_value_text(spec, spec.default_value()) + "]");
             continue;
         }
+        // Required, but a --parameters file may give it: checked after parsing (require_parameters).
         if (spec.required)
-            option->required();
+            option->description(help + " (required)");
         else
             option->default_str(cli_value_text(spec, spec.default_value()));
+    }
+}
+
+long process_id() {
+#ifdef _WIN32
+    return static_cast<long>(_getpid());
+#else
+    return static_cast<long>(getpid());
+#endif
+}
+
+// Writes a mesh under a temporary name in the output's folder, then renames it: a process killed mid-write (a
+// preempted farm task) leaves no partial file under the output name, so an existing output is a complete one. The
+// temporary name keeps the extension (it chooses the format) and holds the process id (two runs of one frame, as
+// when a farm re-queues a task, do not write into each other's file).
+void write_mesh_completely(const TriMesh& mesh, const std::string& output) {
+    const fs::path target = path_from_utf8(output);
+    const fs::path partial = target.parent_path() / path_from_utf8(".partial-" + std::to_string(process_id()) + "-" +
+                                                                    path_to_utf8(target.filename()));
+    std::error_code error;
+    if (!target.parent_path().empty()) fs::create_directories(target.parent_path(), error);  // a farm's fresh output folder
+    try {
+        write_mesh(mesh, path_to_utf8(partial));
+    } catch (...) {
+        fs::remove(partial, error);
+        throw;
+    }
+    fs::rename(partial, target, error);
+    if (error) {
+        std::error_code ignored;
+        fs::remove(partial, ignored);
+        throw FormatError(output + ": cannot move the finished mesh into place (" + error.message() + ")");
     }
 }
 
@@ -296,8 +345,9 @@ json run_frame(const ReconstructArgs& args, const std::string& input, const std:
         if (!check.ok()) progress.message(input + ": mesh check failed: " + check.summary());
     }
     const auto write_start = std::chrono::steady_clock::now();
-    if (!output.empty()) write_mesh(result.mesh, output);
-    if (!raw_output.empty()) write_mesh(result.raw_mesh, raw_output);
+    // The raw mesh first: with --skip-existing, the output's presence means the frame is complete.
+    if (!raw_output.empty()) write_mesh_completely(result.raw_mesh, raw_output);
+    if (!output.empty()) write_mesh_completely(result.mesh, output);
     result.stats.add_seconds("write", std::chrono::duration<double>(std::chrono::steady_clock::now() - write_start).count());
     json stats = stats_json(result.stats);
     for (auto& item : stats.items()) record[item.key()] = item.value();
@@ -365,8 +415,7 @@ void validate_in_flag_names(const Parameters& parameters) {
     } catch (const InputError& error) {
         std::string message = error.what();
         for (const ParameterSpec& spec : parameter_schema()) {
-            const std::size_t start = spec.cli.find("--");
-            const std::string flag = spec.cli.substr(start, spec.cli.find(',', start) - start);
+            const std::string flag = long_flag(spec);
             for (std::size_t at = message.find(spec.name); at != std::string::npos; at = message.find(spec.name, at + flag.size())) {
                 const bool whole = (at == 0 || !(std::isalnum(static_cast<unsigned char>(message[at - 1])) || message[at - 1] == '_')) &&
                                    (at + spec.name.size() == message.size() ||
@@ -378,7 +427,29 @@ void validate_in_flag_names(const Parameters& parameters) {
     }
 }
 
+// A parameter without default that neither a flag nor the --parameters file gave.
+void require_parameters(const ReconstructArgs& args) {
+    if (args.input.empty()) throw InputError("the input particle file (or pattern) is required, as the first argument or \"input\" in --parameters");
+    for (const ParameterSpec& spec : parameter_schema())
+        if (spec.required && spec.get(args.parameters) == spec.default_value())
+            throw InputError(long_flag(spec) + " is required (or " + spec.name + " in the --parameters file)");
+}
+
+// --frames A-B (or A): a farm task's contiguous chunk of frames, the same as -s A -e B.
+void apply_frame_range(ReconstructArgs& args) {
+    if (args.frames.empty()) return;
+    static const std::regex range(R"(\s*(-?\d+)\s*(?:-\s*(-?\d+)\s*(?::\s*1\s*)?)?)");
+    std::smatch match;
+    if (!std::regex_match(args.frames, match, range))
+        throw InputError("--frames takes FIRST-LAST or one frame number (e.g. 1-10), got '" + args.frames + "'");
+    args.start = std::stol(match[1].str());
+    args.end = match[2].matched ? std::stol(match[2].str()) : *args.start;
+    if (*args.end < *args.start) throw InputError("--frames " + args.frames + ": the last frame is before the first");
+}
+
 int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
+    require_parameters(args);
+    apply_frame_range(args);
     if (args.raw_normals)
         throw InputError("--output-raw-normals=on is not supported: Meniscus writes the smoothed normals only (leave it off, "
                          "or set --normals-smoothing-iters 0 for unsmoothed normals)");
@@ -390,6 +461,19 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
         std::error_code error;
         std::filesystem::create_directories(path_from_utf8(args.output_dir), error);
         if (error) throw InputError("--output-dir '" + args.output_dir + "': cannot create the folder (" + error.message() + ")");
+    }
+
+    if (!args.save_parameters_path.empty()) {
+        ParametersFile file;
+        file.parameters = args.parameters;
+        file.input = args.input;
+        file.output = args.output;
+        file.start = args.start;
+        file.end = args.end;
+        if (!args.attributes.empty()) file.attributes = args.attributes;
+        write_parameters_file(file, args.save_parameters_path);
+        if (!args.quiet) std::fprintf(stderr, "parameters written to %s (nothing reconstructed)\n", args.save_parameters_path.c_str());
+        return 0;
     }
 
     std::vector<FrameJob> jobs;
@@ -430,7 +514,7 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
         progress.message("note: -d/--double-precision has no effect in Meniscus: in splashsurf itself, double precision moves "
                          "vertices by at most 0.4 % of a cube (median 0.001 %) and gives the same triangles (README, Command line)");
     std::vector<json> records(jobs.size());
-    std::atomic<std::size_t> next{0}, done{0}, failed{0};
+    std::atomic<std::size_t> next{0}, done{0}, failed{0}, skipped{0};
     std::atomic<bool> interrupted{false};
     std::mutex hooks_mutex;
     auto work = [&] {
@@ -445,11 +529,18 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
             const FrameJob& job = jobs[index];
             const Frame& frame = job.frame;
             json record;
+            std::error_code exists_error;
             try {
-                if (frame.path.empty())
+                if (args.skip_existing && !job.output.empty() && fs::exists(path_from_utf8(job.output), exists_error)) {
+                    // Outputs appear complete or not at all (write_mesh_completely): one that exists is done.
+                    ++skipped;
+                    record = {{"input", frame.path}, {"output", job.output}, {"skipped", "the output exists (--skip-existing)"}};
+                } else if (frame.path.empty()) {
                     throw InputError("frame " + std::to_string(frame.number) + " is missing (" + input_pattern->path(frame.number) + ")");
-                record = run_frame(frame_args, frame.path, job.output, job.raw_output, progress);
-                if (record.contains("failed")) ++failed;
+                } else {
+                    record = run_frame(frame_args, frame.path, job.output, job.raw_output, progress);
+                    if (record.contains("failed")) ++failed;
+                }
             } catch (const std::exception& e) {
                 ++failed;
                 progress.message(std::string("error: ") + e.what() + (sequence ? " (skipped; the sequence goes on)" : ""));
@@ -491,6 +582,16 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
         if (!record.is_null()) report["frames"].push_back(std::move(record));
     report["total_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     report["failed_frames"] = failed.load();
+    report["skipped_frames"] = skipped.load();
+    // Which frames failed, by number in a sequence (by input otherwise), for the farm task's log and for --stats.
+    std::string failed_names;
+    report["failed"] = json::array();
+    for (const json& record : report["frames"])
+        if (record.contains("failed")) {
+            const json name = record.contains("frame") ? record["frame"] : record["input"];
+            report["failed"].push_back(name);
+            failed_names += (failed_names.empty() ? "" : ", ") + (name.is_string() ? name.get<std::string>() : name.dump());
+        }
     report["peak_memory_bytes"] = peak_rss_bytes();
     if (!args.stats_path.empty()) {
         std::ofstream out(path_from_utf8(args.stats_path));
@@ -502,7 +603,8 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
         std::fprintf(stderr, "%s: %.0f particles -> %.0f triangles in %.3f s\n", args.input.c_str(), r["counts"]["particles"].get<double>(),
                      r["counts"]["triangles"].get<double>(), r["seconds"]["total"].get<double>());
     }
-    if (failed) std::fprintf(stderr, "%zu of %zu frames failed\n", failed.load(), jobs.size());
+    if (skipped && !args.quiet) std::fprintf(stderr, "%zu of %zu frames skipped: their output exists\n", skipped.load(), jobs.size());
+    if (failed) std::fprintf(stderr, "%zu of %zu frames failed: %s\n", failed.load(), jobs.size(), failed_names.c_str());
     if (interrupted) return kExitInterrupted;
     return failed ? 1 : 0;
 }
@@ -616,12 +718,23 @@ int run_cli(const std::vector<std::string>& arguments, const CliHooks& hooks) {
     CLI::App* reconstruct = app.add_subcommand("reconstruct", "Reconstruct the surface of a particle file or sequence");
     reconstruct->add_option("input", args.input,
                             "Particle file (VTK, VTU, BGEO, Houdini JSON, PLY, XYZ, NPY/NPZ, CSV); {} or #### in the name "
-                            "stands for the frame number")->required();
+                            "stands for the frame number (required unless --parameters gives it)");
     reconstruct->add_option("-o,--output-file", args.output,
                             "Output mesh (.ply, .obj, .vtk); {} or #### for the frame number (default: {input name}_surface.vtk)");
     reconstruct->add_option("--output-dir", args.output_dir, "Folder for the output files (created if missing; default: the current folder)");
     reconstruct->add_option("-s,--start-index", args.start, "First frame of a sequence");
     reconstruct->add_option("-e,--end-index", args.end, "Last frame of a sequence");
+    reconstruct->add_option("--frames", args.frames, "Frames FIRST-LAST of a sequence (a farm task's chunk), instead of -s/-e")
+        ->excludes("-s")->excludes("-e");
+    reconstruct->add_option("--parameters", args.parameters_path,
+                            "Read the input, output, frames and pipeline parameters from this JSON file (flags given beside it "
+                            "win); written by --save-parameters, the Python API and the Blender add-on");
+    reconstruct->add_option("--save-parameters", args.save_parameters_path,
+                            "Write every pipeline parameter with the input, output and frames to this JSON file and stop "
+                            "(nothing is reconstructed)");
+    reconstruct->add_flag("--skip-existing", args.skip_existing,
+                          "Skip frames whose output exists (outputs are written under a temporary name and renamed when "
+                          "complete, so an existing one is complete): a re-queued farm task redoes only what is missing");
     reconstruct->add_option("--stats", args.stats_path, "Write per-stage seconds, counts and peak memory as JSON");
     reconstruct->add_option("-a,--interpolate-attribute,--interpolate_attribute", args.attributes,
                             "Particle attribute to carry onto the mesh (repeatable); whole-number fields (ids) come from the "
@@ -662,6 +775,11 @@ int run_cli(const std::vector<std::string>& arguments, const CliHooks& hooks) {
     convert->add_option("--domain-max", convert_args.domain_max, "Upper corner of the box of particles to keep")->expected(3)->type_name("X Y Z");
     convert->add_flag("-q,--quiet", convert_args.quiet, "Accepted for splashsurf's command lines");
 
+    // Farm jobs are made by the Python console script, which has the bundle writer and Dask; this executable runs
+    // their tasks. Named here so that `meniscus farm` says where to go rather than "unknown command".
+    CLI::App* farm = app.add_subcommand("farm", "Farm jobs (OpenJD / Deadline Cloud bundles, Dask): in the Python console script");
+    farm->allow_extras()->prefix_command();
+
     // splashsurf's command lines write short options as -r=0.025; CLI11 reads that as the value "=0.025".
     std::vector<std::string> split;
     for (const auto& argument : arguments) {
@@ -670,6 +788,27 @@ int run_cli(const std::vector<std::string>& arguments, const CliHooks& hooks) {
             split.push_back(argument.substr(3));
         } else {
             split.push_back(argument);
+        }
+    }
+    // --parameters FILE fills the arguments before the flags are parsed, so that flags given beside it win.
+    if (split.size() > 1 && split[1] == "reconstruct") {
+        for (std::size_t i = 2; i < split.size(); ++i) {
+            std::string path;
+            if (split[i] == "--parameters" && i + 1 < split.size()) path = split[i + 1];
+            if (split[i].rfind("--parameters=", 0) == 0) path = split[i].substr(13);
+            if (path.empty()) continue;
+            try {
+                ParametersFile file = read_parameters_file(path);
+                args.parameters = file.parameters;
+                if (file.input) args.input = *file.input;
+                if (file.output) args.output = *file.output;
+                args.start = file.start;
+                args.end = file.end;
+                if (file.attributes) args.attributes = *file.attributes;
+            } catch (const std::exception& e) {
+                std::fprintf(stderr, "error: --parameters %s\n", e.what());
+                return 2;
+            }
         }
     }
     std::vector<const char*> argv;
@@ -683,6 +822,12 @@ int run_cli(const std::vector<std::string>& arguments, const CliHooks& hooks) {
         if (*reconstruct) return reconstruct_command(args, hooks);
         if (*inspect) return inspect_command(mesh_path, raw_path, json_path, inspect_radius, inspect_threads);
         if (*convert) return convert_command(convert_args);
+        if (*farm) {
+            std::fprintf(stderr, "meniscus farm is part of the Python console script: pip install meniscus (plus \"meniscus[dask]\" "
+                                 "for Dask), then `meniscus farm openjd ...` or `python -m meniscus farm ...`; see docs/farm.md. "
+                                 "This executable runs the farm's tasks (reconstruct --parameters FILE --frames A-B).\n");
+            return 2;
+        }
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return 2;

@@ -126,6 +126,7 @@ class MENISCUS_PT_cache(_SurfacePanel, bpy.types.Panel):
             row = layout.row()
             row.enabled = settings.source_type == "FILES"
             row.operator("meniscus.bake", text="Bake Frame Range", icon="RENDER_ANIMATION").object_name = obj.name
+            row.operator("meniscus.export_farm_job", text="", icon="NETWORK_DRIVE").object_name = obj.name
         layout.prop(settings, "use_cache")
 
 

@@ -1,0 +1,10 @@
+#!/usr/bin/env bash
+# Makes build/venv/farm (once): the job runners the farm tests drive, Open Job Description's `openjd` and Dask
+# distributed, from PyPI. It sees the system's site packages, so that numpy is Debian's, the one the built module
+# (build/python) is compiled against. Prints the venv's Python.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source scripts/lib.sh
+[ -x build/venv/farm/bin/python ] || /usr/bin/python3 -m venv --system-site-packages build/venv/farm
+venv_with build/venv/farm /usr/bin/python3 "openjd-cli==0.8.0" "dask[distributed]==2026.8.0" >&2
+echo build/venv/farm/bin/python
