@@ -12,7 +12,7 @@ namespace meniscus {
 
 // A label per vertex (0 .. count-1, numbered in the order of each component's smallest vertex index, so
 // deterministic) and their count. Unreferenced vertices get their own labels.
-std::vector<int32_t> component_labels(const TriMesh& mesh, int32_t* count);
+std::vector<int32_t> component_labels(const TriMesh& mesh, int32_t* count, int threads = 1);
 
 // Per-component sums of value(t) over the triangles t, a triangle counting for the component of its first corner.
 // Triangles go in fixed blocks (independent of the thread count), each block sums into its own row in triangle
