@@ -55,29 +55,30 @@ FRAMES=build/bench
 export REFERENCE_PYTHON=$PYTHON
 
 left() { echo $(( BUDGET - ($(date +%s) - START) )); }
-step() {  # step NAME ARGS...: one scaling.py run, killed when the budget is spent
-    local name=$1; shift
+step() {  # step NAME CAP_S ARGS...: one scaling.py run, killed at CAP_S seconds or when the budget is spent
+    local name=$1 cap=$2; shift 2
     local seconds; seconds=$(left)
+    [ "$cap" -lt "$seconds" ] && seconds=$cap
     if [ "$seconds" -lt 20 ]; then echo "== $name: skipped, budget spent"; return; fi
-    echo "== $name ($seconds s left)"
+    echo "== $name ($seconds s at most)"
     timeout --signal=INT --kill-after=5 "$seconds" $PYTHON bench/scaling.py --frames-dir "$FRAMES" \
         --output "$OUT/scaling_${CORES}cores_$name.json" "$@"
     echo "== $name: exit $? after $(( $(date +%s) - START )) s"
 }
 
-# Frames first (their time is not measured), then the steps by value: the full pipeline at 1 M; a 2-core busy
-# machine (cores 0 and 1 only, a 50 k frame at c = 1.0: idle, beside a second CLI in a loop, beside two busy loops;
-# the built-in wait policy against libgomp's default spin, a short one and passive waiting); the full pipeline at
-# 4 M; reconstruction alone with the reference beside it.
+# Frames first (their time is not measured), then the steps by value: the full pipeline at 1 M and 4 M; a 2-core
+# busy machine (cores 0 and 1 only, a 50 k frame at c = 1.0: idle, beside a second CLI in a loop, beside two busy
+# loops; the built-in wait policy against libgomp's default spin, a shorter one and passive waiting); reconstruction
+# alone with the reference beside it.
 $PYTHON -c "import sys; sys.path.insert(0, 'bench'); import pathlib, scaling; [scaling.generated_frame(s, pathlib.Path('$FRAMES')) for s in ('50k', '1M', '4M')]"
-step full_1M --sizes 1M --modes full --repeat 1 --no-reference --threads $THREADS
-step busy_2cores --busy --sizes 50k -c 1.0 --cpus 0,1 --threads 2 --repeat 5 --busy-env "" \
+step full_1M 600 --sizes 1M --modes full --repeat 1 --no-reference --threads $THREADS
+step full_4M 600 --sizes 4M --modes full --repeat 1 --no-reference --threads $THREADS
+step busy_2cores 100 --busy --sizes 50k -c 1.0 --cpus 0,1 --threads 2 --repeat 3 --busy-env "" \
     --busy-env GOMP_SPINCOUNT=300000 --busy-env GOMP_SPINCOUNT=1000 --busy-env OMP_WAIT_POLICY=PASSIVE
-step full_4M --sizes 4M --modes full --repeat 1 --no-reference --threads $THREADS
-step reconstruction_1M --sizes 1M --modes reconstruction --repeat 1 --threads $THREADS
-step reconstruction_4M --sizes 4M --modes reconstruction --repeat 1 --threads $THREADS
-step full_1M_reference --sizes 1M --modes full --repeat 1 --threads $THREADS
+step reconstruction_1M 600 --sizes 1M --modes reconstruction --repeat 1 --threads $THREADS
+step reconstruction_4M 600 --sizes 4M --modes reconstruction --repeat 1 --threads $THREADS
+step full_1M_reference 600 --sizes 1M --modes full --repeat 1 --threads $THREADS
 # Optional: the build before this round's changes, carried as build/bin/meniscus_before, for a same-machine baseline.
-[ -x build/bin/meniscus_before ] && step full_1M_before --sizes 1M --modes full --repeat 1 --no-reference --threads $THREADS \
+[ -x build/bin/meniscus_before ] && step full_1M_before 120 --sizes 1M --modes full --repeat 1 --no-reference --threads $THREADS \
     --cli build/bin/meniscus_before
 echo "done after $(( $(date +%s) - START )) s"

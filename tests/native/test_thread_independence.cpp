@@ -12,6 +12,7 @@
 #include "mesh/adjacency.h"
 #include "mesh/components.h"
 #include "mesh_builders.h"
+#include "test_files.h"
 #include "pipeline.h"
 #include "post/surface_aggregates.h"
 #include "surface/reconstruction.h"
@@ -124,5 +125,25 @@ TEST_CASE("the default pipeline gives the same bits at 1, 2, 3, 4 and 7 threads"
             CHECK(other.mesh.triangles == one.mesh.triangles);
             CHECK(other.mesh.normals == one.mesh.normals);
         }
+    }
+}
+
+TEST_CASE("mesh files have the same bytes whatever the number of encoding threads", "[threads][io]") {
+    TriMesh mesh = make_icosphere(7);
+    REQUIRE(mesh.num_vertices() > 3 * 16384);  // several blocks of records
+    mesh.normals.assign(mesh.vertices.size(), 0.5f);
+    mesh.attributes.push_back({"id", 1, std::vector<float>(mesh.num_vertices(), 7.0f), true});
+    const TempDir dir("threads");
+    for (const std::string extension : {".ply", ".obj", ".vtk"}) {
+        write_mesh(mesh, dir.file("one" + extension), 1);
+        const Bytes one = read_bytes(dir.file("one" + extension));
+        REQUIRE(one.size() > 100000);
+        for (int threads : {2, 3, 7}) {
+            write_mesh(mesh, dir.file("many" + extension), threads);
+            CHECK(read_bytes(dir.file("many" + extension)) == one);
+        }
+        const TriMesh back = read_mesh(dir.file("one" + extension));
+        CHECK(back.triangles == mesh.triangles);
+        CHECK(back.vertices == mesh.vertices);
     }
 }

@@ -15,6 +15,7 @@ FileWriter::FileWriter(const std::string& path) : path_(path) {
     file_ = open_file(path, "wb");
     if (!file_) fail(path, std::string("cannot open for writing: ") + std::strerror(errno));
     buffer_.reserve(kBufferSize);
+    spill_size_ = kBufferSize;
 }
 
 FileWriter::~FileWriter() {
@@ -25,12 +26,12 @@ FileWriter::~FileWriter() {
 }
 
 // Shortest text that reads back as the same float.
-void FileWriter::put_float_text(float f) {
+void Encoder::put_float_text(float f) {
     char text[32];
     put(text, static_cast<std::size_t>(format_decimal(text, f) - text));
 }
 
-void FileWriter::put_int_text(long long v) {
+void Encoder::put_int_text(long long v) {
     char text[24];
     auto r = std::to_chars(text, text + sizeof text, v);
     put(text, static_cast<std::size_t>(r.ptr - text));
@@ -59,10 +60,13 @@ void FileWriter::remove_partial() const {
 }
 
 void FileWriter::flush() {
-    if (buffer_.empty()) return;
-    if (std::fwrite(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size())
-        fail(path_, std::string("write error: ") + std::strerror(errno));
+    write_through(buffer_);
     buffer_.clear();
+}
+
+void FileWriter::write_through(const std::vector<char>& bytes) {
+    if (bytes.empty()) return;
+    if (std::fwrite(bytes.data(), 1, bytes.size(), file_) != bytes.size()) fail(path_, std::string("write error: ") + std::strerror(errno));
 }
 
 void validate_mesh(const TriMesh& mesh, const std::string& path) {
