@@ -14,8 +14,7 @@ namespace io_detail {
 FileWriter::FileWriter(const std::string& path) : path_(path) {
     file_ = open_file(path, "wb");
     if (!file_) fail(path, std::string("cannot open for writing: ") + std::strerror(errno));
-    buffer_.reserve(kBufferSize);
-    spill_size_ = kBufferSize;
+    buffer_.resize(kBufferSize);
 }
 
 FileWriter::~FileWriter() {
@@ -60,14 +59,21 @@ void FileWriter::remove_partial() const {
 }
 
 void FileWriter::flush() {
-    write_through(buffer_);
-    buffer_.clear();
+    write_through(buffer_.data(), used_);
+    used_ = 0;
 }
 
-void FileWriter::write_through(const std::vector<char>& bytes) {
-    if (bytes.empty()) return;
-    if (std::fwrite(bytes.data(), 1, bytes.size(), file_) != bytes.size()) fail(path_, std::string("write error: ") + std::strerror(errno));
+void FileWriter::write_through(const char* bytes, std::size_t n) {
+    if (n == 0) return;
+    if (std::fwrite(bytes, 1, n, file_) != n) fail(path_, std::string("write error: ") + std::strerror(errno));
 }
+
+void FileWriter::make_room(std::size_t n) {
+    flush();
+    if (n > buffer_.size()) buffer_.resize(n);
+}
+
+void Encoder::make_room(std::size_t n) { buffer_.resize(std::max({2 * buffer_.size(), used_ + n, std::size_t{4096}})); }
 
 void validate_mesh(const TriMesh& mesh, const std::string& path) {
     auto bad = [&](const std::string& what) { throw InputError("cannot write mesh to " + path + ": " + what); };

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -26,12 +27,13 @@ public:
     virtual ~Encoder() = default;
 
     void put(std::string_view text) { put(text.data(), text.size()); }
+    // The hot path of every writer (a few bytes at a time): a copy into room already there.
     void put(const void* data, std::size_t n) {
-        const char* p = static_cast<const char*>(data);
-        buffer_.insert(buffer_.end(), p, p + n);
-        if (buffer_.size() >= spill_size_) spill();
+        if (n > buffer_.size() - used_) make_room(n);
+        std::memcpy(buffer_.data() + used_, data, n);
+        used_ += n;
     }
-    void put_u8(std::uint8_t v) { buffer_.push_back(static_cast<char>(v)); }
+    void put_u8(std::uint8_t v) { put(&v, 1); }
     void put_le32(std::uint32_t v) {
         char b[4] = {char(v), char(v >> 8), char(v >> 16), char(v >> 24)};
         put(b, 4);
@@ -46,13 +48,15 @@ public:
     void put_float_text(float f);
     void put_int_text(long long v);
 
-    const std::vector<char>& bytes() const { return buffer_; }
-    void clear() { buffer_.clear(); }
+    const char* data() const { return buffer_.data(); }
+    std::size_t size() const { return used_; }
+    void clear() { used_ = 0; }  // keeps the room
 
 protected:
-    std::vector<char> buffer_;
-    std::size_t spill_size_ = static_cast<std::size_t>(-1);
-    virtual void spill() {}
+    std::vector<char> buffer_;  // bytes [0, used_) are encoded; the rest is room
+    std::size_t used_ = 0;
+    // Room for n more bytes: a plain encoder grows; a FileWriter writes out what it holds.
+    virtual void make_room(std::size_t n);
 };
 
 // Buffered output that reports every failure (open, write, disk full at close) as a FormatError naming the path,
@@ -63,7 +67,7 @@ public:
     ~FileWriter() override;
 
     // Records [0, n) encoded in parallel, encode(begin, end, encoder) per block of records, and written in record
-    // order: the file's bytes do not depend on the thread count. One group of blocks (~kGroupBytes) is held at once.
+    // order: the file's bytes do not depend on the thread count. One group of blocks is held at a time.
     template <class Encode>
     void put_in_parallel(int64_t n, int threads, Encode&& encode);
 
@@ -79,8 +83,8 @@ private:
 
     void remove_partial() const;
     void flush();
-    void write_through(const std::vector<char>& bytes);  // unbuffered: the buffer is empty
-    void spill() override { flush(); }
+    void write_through(const char* bytes, std::size_t n);  // unbuffered: the buffer is empty
+    void make_room(std::size_t n) override;
 };
 
 template <class Encode>
@@ -100,8 +104,8 @@ void FileWriter::put_in_parallel(int64_t n, int threads, Encode&& encode) {
         flush();
         for (int64_t i = 0; i < count; ++i) {
             Encoder& block = encoded[static_cast<std::size_t>(i)];
-            write_through(block.bytes());
-            block.clear();  // its capacity serves the next group
+            write_through(block.data(), block.size());
+            block.clear();  // its room serves the next group
         }
     }
 }
