@@ -147,3 +147,22 @@ TEST_CASE("mesh files have the same bytes whatever the number of encoding thread
         CHECK(back.vertices == mesh.vertices);
     }
 }
+
+TEST_CASE("volumes of very many components are summed in parallel with the same bits at every thread count", "[threads][components]") {
+    // 300 000 separate tetrahedra: more components x blocks than one row per block of triangles allows, so the sums
+    // run over fewer, longer blocks (mesh/components.h) instead of one serial pass.
+    TriMesh mesh;
+    const int tetrahedra = 300000;
+    for (int i = 0; i < tetrahedra; ++i) {
+        const float x = static_cast<float>(i % 1000) * 2.0f, y = static_cast<float>(i / 1000) * 2.0f;
+        const int32_t a = add_vertex(mesh, {x, y, 0}), b = add_vertex(mesh, {x + 1, y, 0}), c = add_vertex(mesh, {x, y + 1, 0}),
+                      d = add_vertex(mesh, {x, y, 1});
+        add_triangle(mesh, a, c, b), add_triangle(mesh, a, b, d), add_triangle(mesh, a, d, c), add_triangle(mesh, b, c, d);
+    }
+    int32_t count = 0;
+    const std::vector<int32_t> labels = component_labels(mesh, &count, 4);
+    REQUIRE(count == tetrahedra);
+    const std::vector<double> one = component_volumes(mesh, labels, count, 1);
+    for (double volume : one) REQUIRE(volume == Approx(1.0 / 6.0));
+    for (int threads : {2, 3, 7}) CHECK(component_volumes(mesh, labels, count, threads) == one);
+}

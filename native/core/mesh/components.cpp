@@ -1,5 +1,8 @@
 #include "mesh/components.h"
 
+#include <atomic>
+#include <limits>
+
 #include "base/compaction.h"
 #include "base/concurrent_disjoint_sets.h"
 #include "base/parallel.h"
@@ -34,9 +37,19 @@ std::vector<int32_t> component_labels(const TriMesh& mesh, int32_t* count, int t
 }
 
 std::vector<double> component_volumes(const TriMesh& mesh, const std::vector<int32_t>& labels, int32_t count, int threads) {
-    std::vector<int32_t> reference(static_cast<std::size_t>(count), -1);
-    for (std::size_t v = 0; v < labels.size(); ++v)
-        if (reference[labels[v]] < 0) reference[labels[v]] = static_cast<int32_t>(v);
+    // Each component's smallest vertex, by an atomic minimum (the same vertex whatever the order).
+    std::vector<std::atomic<int32_t>> smallest(static_cast<std::size_t>(count));
+    for (auto& first : smallest) first.store(std::numeric_limits<int32_t>::max(), std::memory_order_relaxed);
+    parallel_blocks(static_cast<int64_t>(labels.size()), threads, int64_t{1} << 14, [&](int64_t begin, int64_t end) {
+        for (int64_t v = begin; v < end; ++v) {
+            std::atomic<int32_t>& first = smallest[static_cast<std::size_t>(labels[v])];
+            int32_t seen = first.load(std::memory_order_relaxed);
+            while (v < seen && !first.compare_exchange_weak(seen, static_cast<int32_t>(v), std::memory_order_relaxed)) {
+            }
+        }
+    });
+    std::vector<int32_t> reference(static_cast<std::size_t>(count));
+    for (std::size_t c = 0; c < reference.size(); ++c) reference[c] = smallest[c].load(std::memory_order_relaxed);
     const float* vertices = mesh.vertices.data();
     const int32_t* tris = mesh.triangles.data();
     return sum_per_component(mesh, labels, count, threads, [&](int64_t t) {
