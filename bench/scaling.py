@@ -382,4 +382,8 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except KeyboardInterrupt:  # a time limit (bench/scaling_device.sh): what was measured is already written
+        print("interrupted: the JSON holds what was measured until now", flush=True)
+        sys.exit(130)
