@@ -68,13 +68,14 @@ step() {  # step NAME CAP_S ARGS...: one scaling.py run, killed at CAP_S seconds
 
 # Frames first (their time is not measured), then the steps by value: the full pipeline at 1 M and 4 M; a 2-core
 # busy machine (cores 0 and 1 only, a 50 k frame at c = 1.0: idle, beside a second CLI in a loop, beside two busy
-# loops; the built-in wait policy against libgomp's default spin, a shorter one and passive waiting); reconstruction
+# loops; the built-in wait policy against a shorter spin, passive waiting and libgomp's default spin, the slowest,
+# last); reconstruction
 # alone with the reference beside it.
 $PYTHON -c "import sys; sys.path.insert(0, 'bench'); import pathlib, scaling; [scaling.generated_frame(s, pathlib.Path('$FRAMES')) for s in ('50k', '1M', '4M')]"
 step full_1M 600 --sizes 1M --modes full --repeat 1 --no-reference --threads $THREADS
 step full_4M 600 --sizes 4M --modes full --repeat 1 --no-reference --threads $THREADS
 step busy_2cores 100 --busy --sizes 50k -c 1.0 --cpus 0,1 --threads 2 --repeat 3 --busy-env "" \
-    --busy-env GOMP_SPINCOUNT=300000 --busy-env GOMP_SPINCOUNT=1000 --busy-env OMP_WAIT_POLICY=PASSIVE
+    --busy-env GOMP_SPINCOUNT=1000 --busy-env OMP_WAIT_POLICY=PASSIVE --busy-env GOMP_SPINCOUNT=300000
 step reconstruction_1M 600 --sizes 1M --modes reconstruction --repeat 1 --threads $THREADS
 step reconstruction_4M 600 --sizes 4M --modes reconstruction --repeat 1 --threads $THREADS
 step full_1M_reference 600 --sizes 1M --modes full --repeat 1 --threads $THREADS
