@@ -3,26 +3,38 @@ scattered droplets, on the 2r lattice of SPlisHSPlasH-like data. Writes legacy V
 
     python3 bench/generate_frame.py --particles 1000000 --output build/bench/generated_1M.vtk
 """
+from __future__ import annotations
+
 import argparse
+import math
 import pathlib
 
-import numpy as np
+try:
+    import numpy as np
+except ImportError:  # layout() serves bench/scaling.py's plain-Python copy of the recipe without it
+    np = None
 
 
-def generate(count: int, radius: float = 0.025, seed: int = 1) -> np.ndarray:
-    rng = np.random.default_rng(seed)
+def layout(count: int, radius: float = 0.025):
+    """The recipe's sizes: spacing, block, sheet and droplet counts, the block's lattice (nx, ny, nz), the sheet's side."""
     spacing = 2.0 * radius
     block_count = int(count * 0.95)
     sheet_count = int(count * 0.04)
     droplet_count = count - block_count - sheet_count
-    # Block: a box twice as long as it is wide and high, on the lattice, jittered by 10 % of the spacing.
+    # Block: a box twice as long as it is wide and high, on the lattice.
     side = int(round((block_count / 2.0) ** (1.0 / 3.0)))
     nx, ny = 2 * side, side
     nz = max(1, -(-block_count // (nx * ny)))
+    return spacing, block_count, sheet_count, droplet_count, (nx, ny, nz), int(math.sqrt(sheet_count / 2.0))
+
+
+def generate(count: int, radius: float = 0.025, seed: int = 1) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    spacing, block_count, sheet_count, droplet_count, (nx, ny, nz), sheet_side = layout(count, radius)
+    # Block: jittered by 10 % of the spacing.
     grid = np.stack(np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij"), axis=-1).reshape(-1, 3)
     block = (grid[:block_count] + 0.5) * spacing + rng.normal(0.0, 0.1 * spacing, (block_count, 3))
     # Sheet: two layers thick, curling up from the block's far end.
-    sheet_side = int(np.sqrt(sheet_count / 2.0))
     u, v = np.meshgrid(np.arange(sheet_side), np.arange(sheet_side), indexing="ij")
     u, v = u.ravel() * spacing, v.ravel() * spacing
     angle = u / (sheet_side * spacing) * 1.2

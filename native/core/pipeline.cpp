@@ -135,6 +135,10 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
             stats.set_count("smoothing_equivalent_iterations", report.iterations);
             stats.set_count("smoothing_applications", report.applications);  // on the mesh
             stats.set_count("smoothing_aggregates", static_cast<double>(report.aggregates));
+            // Its three phases, to see which one limits the scaling (bench/scaling.py): not stages, so not in the total.
+            stats.set_count("smoothing_flow_seconds", report.seconds_flow);
+            stats.set_count("smoothing_return_seconds", report.seconds_return);
+            stats.set_count("smoothing_correction_seconds", report.seconds_correction);
         } else {
             MeshAdjacency along_walls;  // capped: the contact line smoothed along itself (post/container.h)
             if (!walls.empty()) along_walls.vertex_neighbours = smoothing_neighbours_at_walls(walls, adjacency.vertex_neighbours);

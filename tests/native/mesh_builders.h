@@ -10,6 +10,7 @@
 #include <cstring>
 #include <functional>
 #include <map>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -401,6 +402,24 @@ inline void add_index_attribute(TriMesh& m) {
 
 // A frame of ../shared/data by its name there ("splashsurf/bunny_frame_14_7705_particles.vtk").
 inline std::string shared_frame(const std::string& name) { return std::string(MENISCUS_SHARED_DATA) + "/" + name; }
+
+// Droplets on an nx x nx x 2 lattice of spacing 0.3 (jittered), every second one with a partner nearby: at c = 1.0
+// (r = 0.025) a marching-cubes mesh of many small components carrying barnacles close together.
+inline std::vector<float> droplet_particles(unsigned seed, int nx) {
+    std::mt19937 random(seed);
+    std::uniform_real_distribution<float> offset(0.0f, 0.05f);
+    std::normal_distribution<float> partner(0.0f, 0.025f);
+    std::vector<float> positions;
+    for (int i = 0; i < nx; ++i)
+        for (int j = 0; j < nx; ++j)
+            for (int k = 0; k < 2; ++k) {
+                const float c[3] = {i * 0.3f + offset(random), j * 0.3f + offset(random), k * 0.3f + offset(random)};
+                positions.insert(positions.end(), c, c + 3);
+                if ((i + j + k) % 2)
+                    for (int a = 0; a < 3; ++a) positions.push_back(c[a] + partner(random));
+            }
+    return positions;
+}
 
 inline ReconstructionParams reconstruction_params(double radius, double cube) {
     ReconstructionParams p;

@@ -3,7 +3,6 @@
 #include <catch2/catch.hpp>
 
 #include <cstdint>
-#include <random>
 #include <vector>
 
 #include "analysis/quality.h"
@@ -152,18 +151,7 @@ TEST_CASE("decimation refuses out-of-range indices", "[decimation]") {
 TEST_CASE("decimation of real marching-cubes meshes hands over the adjacency a rebuild gives", "[decimation][reconstruction]") {
     // Droplets (single particles and pairs) at c = 1.0: their blobs carry several barnacles each, close together,
     // so later decimation passes run on patched adjacencies.
-    std::mt19937 random(7);
-    std::uniform_real_distribution<float> offset(0.0f, 0.05f);
-    std::normal_distribution<float> partner(0.0f, 0.025f);
-    std::vector<float> positions;
-    for (int i = 0; i < 10; ++i)
-        for (int j = 0; j < 10; ++j)
-            for (int k = 0; k < 2; ++k) {
-                const float c[3] = {i * 0.3f + offset(random), j * 0.3f + offset(random), k * 0.3f + offset(random)};
-                positions.insert(positions.end(), c, c + 3);
-                if ((i + j + k) % 2)
-                    for (int a = 0; a < 3; ++a) positions.push_back(c[a] + partner(random));
-            }
+    const std::vector<float> positions = droplet_particles(7, 10);
     SurfaceReconstruction r = reconstruct_surface(PositionsView(positions.data(), positions.size() / 3), reconstruction_params(0.025, 1.0), {});
     MeshAdjacency handed;
     REQUIRE(decimate_barnacles(r.mesh, 2, &handed) > 5);

@@ -207,12 +207,12 @@ TriMesh read_mesh(const std::string& path) { return io_detail::read_mesh_from_by
 
 namespace {
 
-template <class Data>
-using Writer = void (*)(const Data&, const std::string&);
+using MeshWriter = void (*)(const TriMesh&, const std::string&, int threads);
+using ParticleWriter = void (*)(const ParticleData&, const std::string&);
 
 // The writer for the path's extension; an InputError listing the supported ones when there is none.
-template <class Data>
-Writer<Data> writer_for(const std::string& path, const char* what, std::initializer_list<std::pair<const char*, Writer<Data>>> writers) {
+template <class Writer>
+Writer writer_for(const std::string& path, const char* what, std::initializer_list<std::pair<const char*, Writer>> writers) {
     const std::string ext = io_detail::lower_extension(path);
     std::string supported;
     for (const auto& [extension, writer] : writers) {
@@ -225,15 +225,15 @@ Writer<Data> writer_for(const std::string& path, const char* what, std::initiali
 
 }  // namespace
 
-void write_mesh(const TriMesh& mesh, const std::string& path) {
-    const Writer<TriMesh> write = writer_for<TriMesh>(
+void write_mesh(const TriMesh& mesh, const std::string& path, int threads) {
+    const MeshWriter write = writer_for<MeshWriter>(
         path, "mesh", {{".ply", io_detail::write_ply_mesh}, {".obj", io_detail::write_obj_mesh}, {".vtk", io_detail::write_vtk_mesh}});
     io_detail::validate_mesh(mesh, path);
-    write(mesh, path);
+    write(mesh, path, threads);
 }
 
 void write_particles(const ParticleData& particles, const std::string& path) {
-    const Writer<ParticleData> write = writer_for<ParticleData>(
+    const ParticleWriter write = writer_for<ParticleWriter>(
         path, "particles",
         {{".vtk", io_detail::write_vtk_particles}, {".ply", io_detail::write_ply_particles}, {".xyz", io_detail::write_xyz_particles}});
     if (particles.positions.size() % 3 != 0)

@@ -25,7 +25,8 @@ ParticleData read_particles(const std::string& path);
 // attribute), .obj (with normals), .vtk (legacy, binary, POLYDATA with normals and attributes as point data).
 // PLY attribute properties: NAME for 1 component, NAME_x NAME_y NAME_z for 3, NAME_0 .. NAME_{k-1} otherwise (details
 // in formats/ply.cpp). An invalid mesh or an unknown extension is an InputError; a failed write a FormatError.
-void write_mesh(const TriMesh& mesh, const std::string& path);
+// Records are encoded on `threads` threads (0: all cores) and written in order: the same bytes for any count.
+void write_mesh(const TriMesh& mesh, const std::string& path, int threads = 1);
 
 // Writes particles and their attributes; the format follows the extension: .vtk (legacy, binary, an unstructured grid
 // of vertex cells, as splashsurf and ParaView read it), .ply (binary vertices with every attribute), .xyz (raw float32

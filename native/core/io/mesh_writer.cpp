@@ -14,7 +14,7 @@ namespace io_detail {
 FileWriter::FileWriter(const std::string& path) : path_(path) {
     file_ = open_file(path, "wb");
     if (!file_) fail(path, std::string("cannot open for writing: ") + std::strerror(errno));
-    buffer_.reserve(kBufferSize);
+    buffer_.resize(kBufferSize);
 }
 
 FileWriter::~FileWriter() {
@@ -25,12 +25,12 @@ FileWriter::~FileWriter() {
 }
 
 // Shortest text that reads back as the same float.
-void FileWriter::put_float_text(float f) {
+void Encoder::put_float_text(float f) {
     char text[32];
     put(text, static_cast<std::size_t>(format_decimal(text, f) - text));
 }
 
-void FileWriter::put_int_text(long long v) {
+void Encoder::put_int_text(long long v) {
     char text[24];
     auto r = std::to_chars(text, text + sizeof text, v);
     put(text, static_cast<std::size_t>(r.ptr - text));
@@ -59,11 +59,21 @@ void FileWriter::remove_partial() const {
 }
 
 void FileWriter::flush() {
-    if (buffer_.empty()) return;
-    if (std::fwrite(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size())
-        fail(path_, std::string("write error: ") + std::strerror(errno));
-    buffer_.clear();
+    write_through(buffer_.data(), used_);
+    used_ = 0;
 }
+
+void FileWriter::write_through(const char* bytes, std::size_t n) {
+    if (n == 0) return;
+    if (std::fwrite(bytes, 1, n, file_) != n) fail(path_, std::string("write error: ") + std::strerror(errno));
+}
+
+void FileWriter::make_room(std::size_t n) {
+    flush();
+    if (n > buffer_.size()) buffer_.resize(n);
+}
+
+void Encoder::make_room(std::size_t n) { buffer_.resize(std::max({2 * buffer_.size(), used_ + n, std::size_t{4096}})); }
 
 void validate_mesh(const TriMesh& mesh, const std::string& path) {
     auto bad = [&](const std::string& what) { throw InputError("cannot write mesh to " + path + ": " + what); };

@@ -25,34 +25,70 @@ void require_row_per_vertex(const CsrList& list, std::size_t vertex_count, const
     if (list.rows() != vertex_count) throw InputError(where + ": the adjacency does not belong to this mesh");
 }
 
-CsrList build_vertex_triangles(const TriMesh& mesh, int threads) {
-    (void)threads;
-    // A sequential counting sort: visiting triangles in order leaves every row sorted without a sort, and it is
-    // several times faster than a parallel fill with atomic slot counters (measured 26 ms against 150 ms for
-    // 1.1 M triangles), the increments being memory-bound either way.
+namespace {
+
+// The distinct vertices of triangle c (a repeated index listed once), in corner order.
+template <class F>
+inline void for_distinct_corners(const int32_t* c, F&& f) {
+    f(c[0]);
+    if (c[1] != c[0]) f(c[1]);
+    if (c[2] != c[0] && c[2] != c[1]) f(c[2]);
+}
+
+// One thread: a counting sort. Visiting triangles in order leaves every row sorted without a sort.
+CsrList serial_vertex_triangles(const TriMesh& mesh) {
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
     const int64_t nt = static_cast<int64_t>(mesh.num_triangles());
     const int32_t* tris = mesh.triangles.data();
     CsrList list;
     list.offsets.assign(static_cast<std::size_t>(nv) + 1, 0);
     int64_t* counts = list.offsets.data() + 1;
-    for (int64_t t = 0; t < nt; ++t) {
-        const int32_t* c = tris + 3 * t;
-        ++counts[c[0]];
-        if (c[1] != c[0]) ++counts[c[1]];  // a triangle with a repeated index is listed once per distinct vertex
-        if (c[2] != c[0] && c[2] != c[1]) ++counts[c[2]];
-    }
+    for (int64_t t = 0; t < nt; ++t) for_distinct_corners(tris + 3 * t, [&](int32_t v) { ++counts[v]; });
     exclusive_scan_in_place(list.offsets);
     list.items.resize(static_cast<std::size_t>(list.offsets.back()));
     std::vector<int64_t> cursor(list.offsets.begin(), list.offsets.end() - 1);
     int32_t* items = list.items.data();
     for (int64_t t = 0; t < nt; ++t) {
-        const int32_t* c = tris + 3 * t;
         const int32_t id = static_cast<int32_t>(t);
-        items[cursor[c[0]]++] = id;
-        if (c[1] != c[0]) items[cursor[c[1]]++] = id;
-        if (c[2] != c[0] && c[2] != c[1]) items[cursor[c[2]]++] = id;
+        for_distinct_corners(tris + 3 * t, [&](int32_t v) { items[cursor[v]++] = id; });
     }
+    return list;
+}
+
+}  // namespace
+
+CsrList build_vertex_triangles(const TriMesh& mesh, int threads) {
+    threads = resolve_threads(threads);
+    if (threads == 1) return serial_vertex_triangles(mesh);
+    // Several threads: the same counting sort with atomic counters (slots in a row go to triangles in whatever order
+    // the threads reach them), then every row sorted, so the lists equal the serial ones bit for bit. Its serial
+    // sweeps over the triangles were most of decimation's time at 16 threads (~0.2 s at 1 M particles).
+    const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
+    const int64_t nt = static_cast<int64_t>(mesh.num_triangles());
+    const int32_t* tris = mesh.triangles.data();
+    std::vector<std::atomic<int32_t>> counts(static_cast<std::size_t>(nv));  // zero (value-initialised)
+    parallel_blocks(nt, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t t = begin; t < end; ++t)
+            for_distinct_corners(tris + 3 * t, [&](int32_t v) { counts[v].fetch_add(1, std::memory_order_relaxed); });
+    });
+    CsrList list;
+    list.offsets.resize(static_cast<std::size_t>(nv) + 1);
+    list.offsets[0] = 0;
+    for (int64_t v = 0; v < nv; ++v) list.offsets[v + 1] = list.offsets[v] + counts[v].load(std::memory_order_relaxed);
+    list.items.resize(static_cast<std::size_t>(list.offsets.back()));
+    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t v = begin; v < end; ++v) counts[v].store(0, std::memory_order_relaxed);  // now the rows' cursors
+    });
+    int32_t* items = list.items.data();
+    parallel_blocks(nt, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t t = begin; t < end; ++t) {
+            const int32_t id = static_cast<int32_t>(t);
+            for_distinct_corners(tris + 3 * t, [&](int32_t v) { items[list.offsets[v] + counts[v].fetch_add(1, std::memory_order_relaxed)] = id; });
+        }
+    });
+    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t v = begin; v < end; ++v) sort_short(items + list.offsets[v], items + list.offsets[v + 1]);
+    });
     return list;
 }
 

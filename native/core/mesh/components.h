@@ -12,7 +12,7 @@ namespace meniscus {
 
 // A label per vertex (0 .. count-1, numbered in the order of each component's smallest vertex index, so
 // deterministic) and their count. Unreferenced vertices get their own labels.
-std::vector<int32_t> component_labels(const TriMesh& mesh, int32_t* count);
+std::vector<int32_t> component_labels(const TriMesh& mesh, int32_t* count, int threads = 1);
 
 // Per-component sums of value(t) over the triangles t, a triangle counting for the component of its first corner.
 // Triangles go in fixed blocks (independent of the thread count), each block sums into its own row in triangle
@@ -26,14 +26,23 @@ std::vector<double> sum_per_component(const TriMesh& mesh, const std::vector<int
     const int64_t triangles = static_cast<int64_t>(mesh.num_triangles());
     auto component = [&](int64_t t) { return labels[mesh.triangles[3 * static_cast<std::size_t>(t)]]; };
     const std::vector<double> zero(static_cast<std::size_t>(count), 0.0);
-    const int64_t blocks = (triangles + kBlock - 1) / kBlock;
-    if (blocks <= 1 || blocks * count > kMaxPartialSums) {
+    int64_t block = kBlock;
+    int64_t blocks = (triangles + block - 1) / block;
+    if (blocks * count > kMaxPartialSums) {
+        // Many components (droplets of a large frame): fewer, longer blocks keep the rows within the cap, instead of
+        // one serial pass (which was several serial passes over every triangle per volume correction at 4 M
+        // particles). The blocks follow from the mesh alone, so the sums have the same bits at any thread count.
+        const int64_t most = kMaxPartialSums / std::max<int64_t>(count, 1);
+        block = most > 1 ? (triangles + most - 1) / most : triangles;
+        blocks = (triangles + block - 1) / block;
+    }
+    if (blocks <= 1) {
         std::vector<double> total = zero;
         for (int64_t t = 0; t < triangles; ++t) total[component(t)] += value(t);
         return total;
     }
     return ordered_block_reduce(
-        triangles, threads, kBlock, zero,
+        triangles, threads, block, zero,
         [&](int64_t begin, int64_t end, std::vector<double>& row) {
             for (int64_t t = begin; t < end; ++t) row[component(t)] += value(t);
         },

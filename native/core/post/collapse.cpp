@@ -1,5 +1,6 @@
 #include "post/collapse.h"
 
+#include "base/compaction.h"
 #include "base/parallel.h"
 
 namespace meniscus {
@@ -33,14 +34,9 @@ void drop_deleted_triangles(std::vector<int32_t>& triangles, const std::vector<u
 std::vector<int32_t> compact_into(TriMesh& mesh, std::vector<int32_t>& triangles, const std::vector<float>& positions,
                                   const std::vector<uint8_t>& removed, const std::vector<int32_t>* group_next, int threads) {
     const int64_t nv = static_cast<int64_t>(removed.size());
-    std::vector<int32_t> new_index(static_cast<std::size_t>(nv), -1);
-    std::vector<int32_t> survivors;
-    survivors.reserve(static_cast<std::size_t>(nv));
-    for (int64_t v = 0; v < nv; ++v)
-        if (!removed[v]) {
-            new_index[v] = static_cast<int32_t>(survivors.size());
-            survivors.push_back(static_cast<int32_t>(v));
-        }
+    std::vector<int32_t> new_index(static_cast<std::size_t>(nv));
+    number_kept(nv, threads, [&](int64_t v) { return !removed[v]; }, new_index.data());
+    const std::vector<int32_t> survivors = kept_indices(nv, threads, [&](int64_t v) { return !removed[v]; });
     const int64_t ns = static_cast<int64_t>(survivors.size());
     parallel_blocks(static_cast<int64_t>(triangles.size()), threads, 16 * kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t i = begin; i < end; ++i) triangles[i] = new_index[triangles[i]];

@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "base/parallel.h"
 #include "base/short_sort.h"
 #include "mesh/adjacency.h"
 #include "mesh/geometry.h"
@@ -39,13 +40,16 @@ class CollapseMesh {
 public:
     // `triangles` and `positions` are the working arrays (edited in place); `vt` is the vertex -> triangle CSR of
     // `triangles` at construction; `removed` flags vertices already collapsed away (kept across rebuilds).
-    CollapseMesh(std::vector<int32_t>& triangles, std::vector<float>& positions, const CsrList& vt, std::vector<uint8_t>& removed)
+    CollapseMesh(std::vector<int32_t>& triangles, std::vector<float>& positions, const CsrList& vt, std::vector<uint8_t>& removed,
+                 int threads = 1)
         : tris_(triangles), pos_(positions), vt_(vt), removed_(removed) {
-        const std::size_t nv = positions.size() / 3;
+        const int64_t nv = static_cast<int64_t>(positions.size() / 3);
         deleted_.assign(triangles.size() / 3, 0);
-        next_.assign(nv, -1);
-        tail_.resize(nv);
-        for (std::size_t v = 0; v < nv; ++v) tail_[v] = static_cast<int32_t>(v);
+        next_.resize(static_cast<std::size_t>(nv));
+        tail_.resize(static_cast<std::size_t>(nv));
+        parallel_blocks(nv, threads, 1 << 14, [&](int64_t begin, int64_t end) {
+            for (int64_t v = begin; v < end; ++v) next_[v] = -1, tail_[v] = static_cast<int32_t>(v);
+        });
     }
 
     const std::vector<uint8_t>& deleted_triangles() const { return deleted_; }

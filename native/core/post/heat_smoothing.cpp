@@ -174,10 +174,20 @@ int chebyshev_apply(std::vector<float>& x, const UmbrellaRows& rows, const std::
     float centre[D];
     for (int d = 0; d < D; ++d) centre[d] = 0.0f;
     if (D == 3) {
-        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-        for (int64_t i = 0; i < nv; ++i)
-            for (int d = 0; d < D; ++d) lo[d] = std::min(lo[d], x[D * i + d]), hi[d] = std::max(hi[d], x[D * i + d]);
-        for (int d = 0; d < D; ++d) centre[d] = 0.5f * lo[d] + 0.5f * hi[d];
+        // The box in fixed blocks folded in order: the serial loop's bits (down to which of +0 and -0 it keeps).
+        struct Box {
+            float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        };
+        const Box box = ordered_block_reduce(
+            nv, threads, 16 * kBlock, Box{},
+            [&](int64_t begin, int64_t end, Box& b) {
+                for (int64_t i = begin; i < end; ++i)
+                    for (int d = 0; d < 3; ++d) b.lo[d] = std::min(b.lo[d], x[D * i + d]), b.hi[d] = std::max(b.hi[d], x[D * i + d]);
+            },
+            [](Box& total, const Box& b) {
+                for (int d = 0; d < 3; ++d) total.lo[d] = std::min(total.lo[d], b.lo[d]), total.hi[d] = std::max(total.hi[d], b.hi[d]);
+            });
+        for (int d = 0; d < D; ++d) centre[d] = 0.5f * box.lo[d] + 0.5f * box.hi[d];
     }
     // Every element of the three is written before it is read: resizing a reused buffer needs no clearing. One float
     // more in the two the stencil reads, for the last vertex's 4-lane load (load_float4): never written by the filter
@@ -309,7 +319,9 @@ ReturnAggregates return_aggregates(const TriMesh& mesh, const MeshAdjacency& adj
     const SurfaceAggregates& g = r.aggregates;
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
     r.valence.resize(static_cast<std::size_t>(nv));
-    for (int64_t i = 0; i < nv; ++i) r.valence[i] = static_cast<float>(adjacency.vertex_neighbours.size(i));
+    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i) r.valence[i] = static_cast<float>(adjacency.vertex_neighbours.size(i));
+    });
     r.density.assign(g.size(), 0.0);
     for (std::size_t a = 0; a < g.size(); ++a) {
         double mass = 0.0, degree = 0.0;
@@ -468,14 +480,18 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
         throw InputError("heat_smooth: got " + std::to_string(weights_in.size()) + " weights for " + std::to_string(nv) + " vertices");
     if (!(settings.reach > 0.0) || nv == 0) return report;
     const double radius = settings.particle_radius > 0.0 ? settings.particle_radius : settings.reach / 4.0;
-    for (float v : mesh.vertices)
-        if (!std::isfinite(v)) throw InputError("heat_smooth: the mesh has a non-finite vertex coordinate");
+    if (parallel_count(static_cast<int64_t>(mesh.vertices.size()), threads, [&](int64_t i) { return !std::isfinite(mesh.vertices[i]); }))
+        throw InputError("heat_smooth: the mesh has a non-finite vertex coordinate");
     // Weights are documented as [0, 1]: clamp rounding (1.0000001) so no step overshoots; NaN would spread everywhere.
-    std::vector<float> weights(weights_in.size());
-    for (std::size_t i = 0; i < weights_in.size(); ++i) {
-        if (std::isnan(weights_in[i])) throw InputError("heat_smooth: weight of vertex " + std::to_string(i) + " is NaN");
-        weights[i] = std::fmin(1.0f, std::fmax(0.0f, weights_in[i]));
+    const int64_t weight_count = static_cast<int64_t>(weights_in.size());
+    if (parallel_count(weight_count, threads, [&](int64_t i) { return std::isnan(weights_in[i]); })) {
+        const auto nan = std::find_if(weights_in.begin(), weights_in.end(), [](float w) { return std::isnan(w); });
+        throw InputError("heat_smooth: weight of vertex " + std::to_string(nan - weights_in.begin()) + " is NaN");
     }
+    std::vector<float> weights(weights_in.size());
+    parallel_blocks(weight_count, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i) weights[i] = std::fmin(1.0f, std::fmax(0.0f, weights_in[i]));
+    });
     const WallConstraints* walls = settings.walls && !settings.walls->empty() ? settings.walls : nullptr;
     std::vector<uint8_t> frozen;
     // Capped, the flow smooths the contact line along itself, as the iterations do (post/container.h): the cap below

@@ -5,7 +5,8 @@
 #include <string>
 #include <type_traits>
 
-#include "base/disjoint_sets.h"
+#include "base/compaction.h"
+#include "base/concurrent_disjoint_sets.h"
 #include "base/errors.h"
 #include "base/parallel.h"
 
@@ -68,19 +69,27 @@ SurfaceAggregates aggregate_surface(const TriMesh& mesh, const MeshAdjacency& ad
             key[i] = packed;
         }
     });
-    DisjointSets pieces(static_cast<std::size_t>(nv));
-    for (int64_t i = 0; i < nv; ++i)
-        for (int64_t e = nb.begin(i); e < nb.end(i); ++e) {
-            const int32_t j = nb.items[e];
-            if (j > i && key[j] == key[i]) pieces.unite(static_cast<int32_t>(i), j);
-        }
-    // Numbered in the order of their smallest vertex (the root, met first).
+    // The pieces: connected vertices of one cell, united in parallel; each ends rooted at its smallest vertex
+    // (base/concurrent_disjoint_sets.h) and they are numbered in that vertex's order, at any thread count.
+    ConcurrentDisjointSets pieces(static_cast<std::size_t>(nv), threads);
+    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i)
+            for (int64_t e = nb.begin(i); e < nb.end(i); ++e) {
+                const int32_t j = nb.items[e];
+                if (j > i && key[j] == key[i]) pieces.unite(static_cast<int32_t>(i), j);
+            }
+    });
+    std::vector<int32_t> root(static_cast<std::size_t>(nv));
+    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i) root[i] = pieces.find(static_cast<int32_t>(i));
+    });
     g.of_vertex.resize(static_cast<std::size_t>(nv));
-    int32_t count = 0;
-    for (int64_t i = 0; i < nv; ++i) {
-        const int32_t root = pieces.find(static_cast<int32_t>(i));
-        g.of_vertex[i] = root == i ? count++ : g.of_vertex[root];
-    }
+    const int32_t count = static_cast<int32_t>(number_kept(nv, threads, [&](int64_t i) { return root[i] == i; }, g.of_vertex.data()));
+    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i)
+            if (root[i] != i) g.of_vertex[i] = g.of_vertex[root[i]];
+    });
+    root = std::vector<int32_t>();
     g.members.offsets.assign(static_cast<std::size_t>(count) + 1, 0);
     for (int64_t i = 0; i < nv; ++i) ++g.members.offsets[g.of_vertex[i] + 1];
     for (int32_t a = 0; a < count; ++a) g.members.offsets[a + 1] += g.members.offsets[a];

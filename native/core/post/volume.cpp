@@ -43,7 +43,7 @@ void move_along_normals(TriMesh& mesh, const std::vector<int32_t>& labels, const
 
 UnsmoothedSurface record_unsmoothed_surface(const TriMesh& mesh, int threads) {
     UnsmoothedSurface surface;
-    surface.labels = component_labels(mesh, &surface.components);
+    surface.labels = component_labels(mesh, &surface.components, threads);
     surface.volumes = component_volumes(mesh, surface.labels, surface.components, threads);
     surface.positions = mesh.vertices;
     return surface;

@@ -195,6 +195,12 @@ std::vector<LatticeCoords> bricks_near_particles(const ParticleGrid& grid, doubl
                     for (int64_t y = lo[1]; y <= hi[1]; ++y)
                         for (int64_t x = lo[0]; x <= hi[0]; ++x) mine.push_back({x, y, z});
             });
+        // Neighbouring cells list the same bricks many times over: each thread drops its own repeats first, so the
+        // serial sort below sees each brick about once per thread instead of once per cell near it.
+        errors.run([&] {
+            std::sort(mine.begin(), mine.end(), coords_less);
+            mine.erase(std::unique(mine.begin(), mine.end()), mine.end());
+        });
     }
     errors.rethrow();
     std::vector<LatticeCoords> bricks;

@@ -144,38 +144,43 @@ private:
 
 TriMesh read_obj_mesh(const Source& source) { return ObjParser(source).read(); }
 
-void write_obj_mesh(const TriMesh& mesh, const std::string& path) {
+void write_obj_mesh(const TriMesh& mesh, const std::string& path, int threads) {
     const std::size_t nv = mesh.num_vertices(), nt = mesh.num_triangles();
     const bool normals = !mesh.normals.empty();
     FileWriter out(path);
     out.put("# written by meniscus: " + std::to_string(nv) + " vertices, " + std::to_string(nt) + " triangles, " +
             std::to_string(mesh.num_quads()) + " quads\n");
-    auto put_vec = [&](const char* tag, const std::vector<float>& data, std::size_t i) {
-        out.put(tag);
-        for (int k = 0; k < 3; ++k) {
-            out.put(" ");
-            out.put_float_text(data[3 * i + k]);
-        }
-        out.put("\n");
+    auto put_vectors = [&](const char* tag, const std::vector<float>& data) {
+        out.put_in_parallel(static_cast<int64_t>(nv), threads, [&](int64_t begin, int64_t end, Encoder& block) {
+            for (int64_t i = begin; i < end; ++i) {
+                block.put(tag);
+                for (int k = 0; k < 3; ++k) {
+                    block.put(" ");
+                    block.put_float_text(data[3 * i + k]);
+                }
+                block.put("\n");
+            }
+        });
     };
-    for (std::size_t v = 0; v < nv; ++v) put_vec("v", mesh.vertices, v);
-    if (normals)
-        for (std::size_t v = 0; v < nv; ++v) put_vec("vn", mesh.normals, v);
-    auto put_face = [&](const int32_t* corners, int count) {
-        out.put("f");
+    put_vectors("v", mesh.vertices);
+    if (normals) put_vectors("vn", mesh.normals);
+    auto put_face = [&](Encoder& block, const int32_t* corners, int count) {
+        block.put("f");
         for (int k = 0; k < count; ++k) {
             long long index = static_cast<long long>(corners[k]) + 1;  // OBJ counts from 1
-            out.put(" ");
-            out.put_int_text(index);
+            block.put(" ");
+            block.put_int_text(index);
             if (normals) {
-                out.put("//");
-                out.put_int_text(index);
+                block.put("//");
+                block.put_int_text(index);
             }
         }
-        out.put("\n");
+        block.put("\n");
     };
-    for (std::size_t t = 0; t < nt; ++t) put_face(&mesh.triangles[3 * t], 3);
-    for (std::size_t q = 0; q < mesh.num_quads(); ++q) put_face(&mesh.quads[4 * q], 4);
+    out.put_in_parallel(static_cast<int64_t>(nt), threads, [&](int64_t begin, int64_t end, Encoder& block) {
+        for (int64_t t = begin; t < end; ++t) put_face(block, &mesh.triangles[3 * t], 3);
+    });
+    for (std::size_t q = 0; q < mesh.num_quads(); ++q) put_face(out, &mesh.quads[4 * q], 4);
     out.close();
 }
 

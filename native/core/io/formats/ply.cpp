@@ -357,7 +357,7 @@ ParticleData read_ply_particles(const Source& source) {
 
 TriMesh read_ply_mesh(const Source& source) { return PlyReader(source).read(); }
 
-void write_ply_mesh(const TriMesh& mesh, const std::string& path) {
+void write_ply_mesh(const TriMesh& mesh, const std::string& path, int threads) {
     const std::size_t nv = mesh.num_vertices(), nt = mesh.num_triangles();
     const bool normals = !mesh.normals.empty();
     std::string header = "ply\nformat binary_little_endian 1.0\ncomment written by meniscus\nelement vertex " +
@@ -379,24 +379,28 @@ void write_ply_mesh(const TriMesh& mesh, const std::string& path) {
 
     FileWriter out(path);
     out.put(header);
-    for (std::size_t v = 0; v < nv; ++v) {
-        for (int k = 0; k < 3; ++k) out.put_le_float(mesh.vertices[3 * v + k]);
-        if (normals)
-            for (int k = 0; k < 3; ++k) out.put_le_float(mesh.normals[3 * v + k]);
-        for (const auto& a : mesh.attributes)
-            for (int k = 0; k < a.components; ++k) {
-                const float value = a.values[v * a.components + k];
-                if (a.integral)
-                    out.put_le32(static_cast<std::uint32_t>(
-                        std::isfinite(value) ? static_cast<std::int32_t>(std::clamp(value, -2147483648.0f, 2147483520.0f)) : 0));
-                else
-                    out.put_le_float(value);
-            }
-    }
-    for (std::size_t t = 0; t < nt; ++t) {
-        out.put_u8(3);
-        for (int k = 0; k < 3; ++k) out.put_le32(static_cast<std::uint32_t>(mesh.triangles[3 * t + k]));
-    }
+    out.put_in_parallel(static_cast<int64_t>(nv), threads, [&](int64_t begin, int64_t end, Encoder& block) {
+        for (int64_t v = begin; v < end; ++v) {
+            for (int k = 0; k < 3; ++k) block.put_le_float(mesh.vertices[3 * v + k]);
+            if (normals)
+                for (int k = 0; k < 3; ++k) block.put_le_float(mesh.normals[3 * v + k]);
+            for (const auto& a : mesh.attributes)
+                for (int k = 0; k < a.components; ++k) {
+                    const float value = a.values[v * a.components + k];
+                    if (a.integral)
+                        block.put_le32(static_cast<std::uint32_t>(
+                            std::isfinite(value) ? static_cast<std::int32_t>(std::clamp(value, -2147483648.0f, 2147483520.0f)) : 0));
+                    else
+                        block.put_le_float(value);
+                }
+        }
+    });
+    out.put_in_parallel(static_cast<int64_t>(nt), threads, [&](int64_t begin, int64_t end, Encoder& block) {
+        for (int64_t t = begin; t < end; ++t) {
+            block.put_u8(3);
+            for (int k = 0; k < 3; ++k) block.put_le32(static_cast<std::uint32_t>(mesh.triangles[3 * t + k]));
+        }
+    });
     for (std::size_t q = 0; q < mesh.num_quads(); ++q) {
         out.put_u8(4);
         for (int k = 0; k < 4; ++k) out.put_le32(static_cast<std::uint32_t>(mesh.quads[4 * q + k]));
@@ -409,7 +413,7 @@ void write_ply_particles(const ParticleData& particles, const std::string& path)
     TriMesh points;
     points.vertices = particles.positions;
     points.attributes = particles.attributes;
-    write_ply_mesh(points, path);
+    write_ply_mesh(points, path, 1);
 }
 
 }  // namespace io_detail

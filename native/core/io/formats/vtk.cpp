@@ -95,18 +95,22 @@ TriMesh read_vtk_mesh(const Source& source) {
     return mesh;
 }
 
-void write_vtk_mesh(const TriMesh& mesh, const std::string& path) {
+void write_vtk_mesh(const TriMesh& mesh, const std::string& path, int threads) {
     const std::size_t nv = mesh.num_vertices(), nt = mesh.num_triangles();
     FileWriter out(path);
     out.put("# vtk DataFile Version 4.2\nmeniscus surface mesh\nBINARY\nDATASET POLYDATA\nPOINTS " + std::to_string(nv) +
             " float\n");
-    for (float x : mesh.vertices) out.put_be_float(x);
+    out.put_in_parallel(static_cast<int64_t>(mesh.vertices.size()), threads, [&](int64_t begin, int64_t end, Encoder& block) {
+        for (int64_t i = begin; i < end; ++i) block.put_be_float(mesh.vertices[i]);
+    });
     const std::size_t nq = mesh.num_quads();
     out.put("\nPOLYGONS " + std::to_string(nt + nq) + " " + std::to_string(4 * nt + 5 * nq) + "\n");
-    for (std::size_t t = 0; t < nt; ++t) {
-        out.put_be32(3);
-        for (int k = 0; k < 3; ++k) out.put_be32(static_cast<std::uint32_t>(mesh.triangles[3 * t + k]));
-    }
+    out.put_in_parallel(static_cast<int64_t>(nt), threads, [&](int64_t begin, int64_t end, Encoder& block) {
+        for (int64_t t = begin; t < end; ++t) {
+            block.put_be32(3);
+            for (int k = 0; k < 3; ++k) block.put_be32(static_cast<std::uint32_t>(mesh.triangles[3 * t + k]));
+        }
+    });
     for (std::size_t q = 0; q < nq; ++q) {
         out.put_be32(4);
         for (int k = 0; k < 4; ++k) out.put_be32(static_cast<std::uint32_t>(mesh.quads[4 * q + k]));

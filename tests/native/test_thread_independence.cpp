@@ -1,0 +1,168 @@
+// The parallel building blocks and the default pipeline give the same bits at every thread count, and the parallel
+// versions of once-serial steps give what the serial ones gave (base/compaction.h, base/concurrent_disjoint_sets.h,
+// the vertex -> triangle lists, component labels, surface aggregates).
+#include <catch2/catch.hpp>
+
+#include <cstdint>
+#include <vector>
+
+#include "base/compaction.h"
+#include "base/concurrent_disjoint_sets.h"
+#include "io/io.h"
+#include "mesh/adjacency.h"
+#include "mesh/components.h"
+#include "mesh_builders.h"
+#include "test_files.h"
+#include "pipeline.h"
+#include "post/surface_aggregates.h"
+#include "surface/reconstruction.h"
+
+using namespace meniscus;
+using namespace meniscus::test;
+
+namespace {
+
+const int kThreadCounts[] = {1, 2, 3, 4, 7};
+
+TriMesh droplet_mesh() {
+    const std::vector<float> positions = droplet_particles(11, 12);
+    return reconstruct_surface(PositionsView(positions.data(), positions.size() / 3), reconstruction_params(0.025, 1.0), {}).mesh;
+}
+
+}  // namespace
+
+TEST_CASE("order-keeping compaction numbers the kept items as a serial loop does", "[threads]") {
+    const int64_t n = 3 * kCompactionBlock + 17;  // several blocks and a partial one
+    auto keep = [](int64_t i) { return (i * 2654435761u) % 7 < 3; };
+    std::vector<int32_t> serial_index(static_cast<std::size_t>(n), -1), serial_kept;
+    for (int64_t i = 0; i < n; ++i)
+        if (keep(i)) serial_index[i] = static_cast<int32_t>(serial_kept.size()), serial_kept.push_back(static_cast<int32_t>(i));
+    REQUIRE(serial_kept.size() > static_cast<std::size_t>(kCompactionBlock));
+    for (int threads : kThreadCounts) {
+        std::vector<int32_t> index(static_cast<std::size_t>(n), 99);
+        CHECK(number_kept(n, threads, keep, index.data()) == static_cast<int64_t>(serial_kept.size()));
+        CHECK(index == serial_index);
+        CHECK(kept_indices(n, threads, keep) == serial_kept);
+    }
+    CHECK(kept_indices(0, 2, keep).empty());
+}
+
+TEST_CASE("concurrent disjoint sets end with the smallest element as every set's root", "[threads]") {
+    // Chains 0-3-6-..., 1-4-7-..., 2-5-8-... united from the far end, in parallel.
+    const int32_t n = 30000;
+    ConcurrentDisjointSets sets(n, 4);
+    parallel_for(n - 3, 4, [&](int64_t i) { sets.unite(static_cast<int32_t>(n - 1 - i), static_cast<int32_t>(n - 4 - i)); });
+    for (int32_t v = 0; v < n; ++v) REQUIRE(sets.find(v) == v % 3);
+}
+
+TEST_CASE("vertex -> triangle lists are the serial counting sort's at every thread count", "[threads][adjacency]") {
+    TriMesh mesh = droplet_mesh();
+    REQUIRE(mesh.num_triangles() > 10000);
+    // A repeated index is listed once per distinct vertex.
+    mesh.triangles.insert(mesh.triangles.end(), {5, 5, 9, 7, 8, 7, 3, 3, 3});
+    const CsrList serial = build_vertex_triangles(mesh, 1);
+    for (int64_t v = 0; v < static_cast<int64_t>(serial.rows()); ++v)
+        REQUIRE(std::is_sorted(serial.items.begin() + serial.offsets[v], serial.items.begin() + serial.offsets[v + 1]));
+    for (int threads : kThreadCounts) {
+        const CsrList parallel = build_vertex_triangles(mesh, threads);
+        CHECK(parallel.offsets == serial.offsets);
+        CHECK(parallel.items == serial.items);
+    }
+}
+
+TEST_CASE("component labels are numbered by smallest vertex at every thread count", "[threads][components]") {
+    const TriMesh mesh = droplet_mesh();
+    // The reference: a breadth-first search from each vertex not yet labelled, in vertex order.
+    const MeshAdjacency adjacency = build_adjacency(mesh, 1);
+    std::vector<int32_t> expected(mesh.num_vertices(), -1);
+    int32_t expected_count = 0;
+    for (std::size_t start = 0; start < expected.size(); ++start) {
+        if (expected[start] >= 0) continue;
+        std::vector<int32_t> queue{static_cast<int32_t>(start)};
+        expected[start] = expected_count;
+        for (std::size_t q = 0; q < queue.size(); ++q)
+            for (int64_t k = adjacency.vertex_neighbours.begin(queue[q]); k < adjacency.vertex_neighbours.end(queue[q]); ++k) {
+                const int32_t u = adjacency.vertex_neighbours.items[k];
+                if (expected[u] < 0) expected[u] = expected_count, queue.push_back(u);
+            }
+        ++expected_count;
+    }
+    REQUIRE(expected_count > 100);
+    for (int threads : kThreadCounts) {
+        int32_t count = 0;
+        CHECK(component_labels(mesh, &count, threads) == expected);
+        CHECK(count == expected_count);
+    }
+}
+
+TEST_CASE("surface aggregates are the same at every thread count", "[threads][aggregates]") {
+    const TriMesh mesh = droplet_mesh();
+    const MeshAdjacency adjacency = build_adjacency(mesh, 1);
+    const SurfaceAggregates one = aggregate_surface(mesh, adjacency, 0.05, 1);
+    REQUIRE(one.size() > 100);
+    for (int threads : kThreadCounts) {
+        const SurfaceAggregates g = aggregate_surface(mesh, adjacency, 0.05, threads);
+        CHECK(g.of_vertex == one.of_vertex);
+        CHECK(g.members.items == one.members.items);
+        CHECK(g.neighbours.items == one.neighbours.items);
+        CHECK(g.coupling == one.coupling);
+    }
+}
+
+TEST_CASE("the default pipeline gives the same bits at 1, 2, 3, 4 and 7 threads", "[threads][determinism]") {
+    const ParticleData particles = read_particles(shared_frame("splashsurf/hilbert2_7954_particles.vtk"));
+    for (double cube : {0.5, 1.0}) {
+        PipelineOptions options;  // the defaults: decimation, weights, the reach's heat flow, normals
+        options.reconstruction = reconstruction_params(0.025, cube);
+        options.execution.threads = 1;
+        const PipelineResult one = run_pipeline(PositionsView(particles.positions.data(), particles.size()), {}, options);
+        REQUIRE(one.mesh.num_triangles() > 0);
+        for (int threads : kThreadCounts) {
+            options.execution.threads = threads;
+            const PipelineResult other = run_pipeline(PositionsView(particles.positions.data(), particles.size()), {}, options);
+            INFO("c = " << cube << ", " << threads << " threads");
+            CHECK(other.mesh.vertices == one.mesh.vertices);
+            CHECK(other.mesh.triangles == one.mesh.triangles);
+            CHECK(other.mesh.normals == one.mesh.normals);
+        }
+    }
+}
+
+TEST_CASE("mesh files have the same bytes whatever the number of encoding threads", "[threads][io]") {
+    TriMesh mesh = make_icosphere(7);
+    REQUIRE(mesh.num_vertices() > 3 * 16384);  // several blocks of records
+    mesh.normals.assign(mesh.vertices.size(), 0.5f);
+    mesh.attributes.push_back({"id", 1, std::vector<float>(mesh.num_vertices(), 7.0f), true});
+    const TempDir dir("threads");
+    for (const std::string extension : {".ply", ".obj", ".vtk"}) {
+        write_mesh(mesh, dir.file("one" + extension), 1);
+        const Bytes one = read_bytes(dir.file("one" + extension));
+        REQUIRE(one.size() > 100000);
+        for (int threads : {2, 3, 7}) {
+            write_mesh(mesh, dir.file("many" + extension), threads);
+            CHECK(read_bytes(dir.file("many" + extension)) == one);
+        }
+        const TriMesh back = read_mesh(dir.file("one" + extension));
+        CHECK(back.triangles == mesh.triangles);
+        CHECK(back.vertices == mesh.vertices);
+    }
+}
+
+TEST_CASE("volumes of very many components are summed in parallel with the same bits at every thread count", "[threads][components]") {
+    // 300 000 separate tetrahedra: more components x blocks than one row per block of triangles allows, so the sums
+    // run over fewer, longer blocks (mesh/components.h) instead of one serial pass.
+    TriMesh mesh;
+    const int tetrahedra = 300000;
+    for (int i = 0; i < tetrahedra; ++i) {
+        const float x = static_cast<float>(i % 1000) * 2.0f, y = static_cast<float>(i / 1000) * 2.0f;
+        const int32_t a = add_vertex(mesh, {x, y, 0}), b = add_vertex(mesh, {x + 1, y, 0}), c = add_vertex(mesh, {x, y + 1, 0}),
+                      d = add_vertex(mesh, {x, y, 1});
+        add_triangle(mesh, a, c, b), add_triangle(mesh, a, b, d), add_triangle(mesh, a, d, c), add_triangle(mesh, b, c, d);
+    }
+    int32_t count = 0;
+    const std::vector<int32_t> labels = component_labels(mesh, &count, 4);
+    REQUIRE(count == tetrahedra);
+    const std::vector<double> one = component_volumes(mesh, labels, count, 1);
+    for (double volume : one) REQUIRE(volume == Approx(1.0 / 6.0));
+    for (int threads : {2, 3, 7}) CHECK(component_volumes(mesh, labels, count, threads) == one);
+}
