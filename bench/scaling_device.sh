@@ -72,14 +72,21 @@ step() {  # step NAME CAP_S ARGS...: one scaling.py run, killed at CAP_S seconds
 # last); reconstruction
 # alone with the reference beside it.
 $PYTHON -c "import sys; sys.path.insert(0, 'bench'); import pathlib, scaling; [scaling.generated_frame(s, pathlib.Path('$FRAMES')) for s in ('50k', '1M', '4M')]"
-step full_1M 600 --sizes 1M --modes full --repeat 1 --no-reference --threads $THREADS
-step full_4M 600 --sizes 4M --modes full --repeat 1 --no-reference --threads $THREADS
-step busy_2cores 100 --busy --sizes 50k -c 1.0 --cpus 0,1 --threads 2 --repeat 3 --busy-env "" \
-    --busy-env GOMP_SPINCOUNT=1000 --busy-env OMP_WAIT_POLICY=PASSIVE --busy-env GOMP_SPINCOUNT=300000
-step reconstruction_1M 600 --sizes 1M --modes reconstruction --repeat 1 --threads $THREADS
-step reconstruction_4M 600 --sizes 4M --modes reconstruction --repeat 1 --threads $THREADS
-step full_1M_reference 600 --sizes 1M --modes full --repeat 1 --threads $THREADS
-# Optional: the build before this round's changes, carried as build/bin/meniscus_before, for a same-machine baseline.
-[ -x build/bin/meniscus_before ] && step full_1M_before 120 --sizes 1M --modes full --repeat 1 --no-reference --threads $THREADS \
-    --cli build/bin/meniscus_before
+# SCALING_STEPS picks and orders the steps (default: all, in order of value).
+STEPS=${SCALING_STEPS:-"full_1M full_1M_before busy_2cores reconstruction_1M full_4M reconstruction_4M full_1M_reference"}
+for name in $STEPS; do
+    case $name in
+        full_1M) step full_1M 600 --sizes 1M --modes full --repeat 1 --no-reference --threads $THREADS ;;
+        full_4M) step full_4M 600 --sizes 4M --modes full --repeat 1 --no-reference --threads $THREADS ;;
+        busy_2cores) step busy_2cores 100 --busy --sizes 50k -c 1.0 --cpus 0,1 --threads 2 --repeat 3 --busy-env "" \
+            --busy-env GOMP_SPINCOUNT=1000 --busy-env OMP_WAIT_POLICY=PASSIVE --busy-env GOMP_SPINCOUNT=300000 ;;
+        reconstruction_1M) step reconstruction_1M 600 --sizes 1M --modes reconstruction --repeat 1 --threads $THREADS ;;
+        reconstruction_4M) step reconstruction_4M 600 --sizes 4M --modes reconstruction --repeat 1 --threads $THREADS ;;
+        full_1M_reference) step full_1M_reference 600 --sizes 1M --modes full --repeat 1 --threads $THREADS ;;
+        # The build before this round's changes, carried as build/bin/meniscus_before: a same-machine baseline.
+        full_1M_before) [ -x build/bin/meniscus_before ] && step full_1M_before 120 --sizes 1M --modes full --repeat 1 \
+            --no-reference --threads $THREADS --cli build/bin/meniscus_before ;;
+        *) echo "unknown step $name" ;;
+    esac
+done
 echo "done after $(( $(date +%s) - START )) s"

@@ -286,14 +286,14 @@ long process_id() {
 // preempted farm task) leaves no partial file under the output name, so an existing output is a complete one. The
 // temporary name keeps the extension (it chooses the format) and holds the process id (two runs of one frame, as
 // when a farm re-queues a task, do not write into each other's file).
-void write_mesh_completely(const TriMesh& mesh, const std::string& output) {
+void write_mesh_completely(const TriMesh& mesh, const std::string& output, int threads) {
     const fs::path target = path_from_utf8(output);
     const fs::path partial = target.parent_path() / path_from_utf8(".partial-" + std::to_string(process_id()) + "-" +
                                                                     path_to_utf8(target.filename()));
     std::error_code error;
     if (!target.parent_path().empty()) fs::create_directories(target.parent_path(), error);  // a farm's fresh output folder
     try {
-        write_mesh(mesh, path_to_utf8(partial));
+        write_mesh(mesh, path_to_utf8(partial), threads);
     } catch (...) {
         fs::remove(partial, error);
         throw;
@@ -346,8 +346,9 @@ json run_frame(const ReconstructArgs& args, const std::string& input, const std:
     }
     const auto write_start = std::chrono::steady_clock::now();
     // The raw mesh first: with --skip-existing, the output's presence means the frame is complete.
-    if (!raw_output.empty()) write_mesh_completely(result.raw_mesh, raw_output);
-    if (!output.empty()) write_mesh_completely(result.mesh, output);
+    const int write_threads = resolve_threads(args.parameters.execution.threads);  // the frame's share, as its pipeline
+    if (!raw_output.empty()) write_mesh_completely(result.raw_mesh, raw_output, write_threads);
+    if (!output.empty()) write_mesh_completely(result.mesh, output, write_threads);
     result.stats.add_seconds("write", std::chrono::duration<double>(std::chrono::steady_clock::now() - write_start).count());
     json stats = stats_json(result.stats);
     for (auto& item : stats.items()) record[item.key()] = item.value();
