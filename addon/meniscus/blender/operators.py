@@ -69,8 +69,9 @@ class MENISCUS_OT_add_sequence(bpy.types.Operator, ImportHelper):
     )
     use_scene_frame_range: BoolProperty(
         name="Set Scene Frame Range",
-        description="Set the scene's start and end frames to the frames found on disk",
-        default=False,
+        description="Set the scene's start and end frames to the frames found on disk (minus the surface's "
+                    "frame offset)",
+        default=True,
     )
 
     def execute(self, context):

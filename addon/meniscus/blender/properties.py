@@ -6,13 +6,15 @@ property per parameter, same name, label, tooltip, range and default as the API 
 with an automatic value gets a `<name>_auto` switch beside it); the rest are the add-on's own: where particles come
 from, the cache, the viewport cube size, custom normals, which attributes to carry.
 """
+import os
+import re
 import sys
 
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
 from .. import cache, parameters, sequence
-from . import container
+from . import container, render_policy
 
 # The layout of the settings, stored in each surface; files saved before the schema (0) are converted on load.
 SETTINGS_VERSION = 3
@@ -32,6 +34,19 @@ def _rebuild_after_edit(settings, context):
     scene = getattr(context, "scene", None) or bpy.context.scene
     if scene is not None:
         update.update_surface(settings.id_data, scene)
+
+
+def _play_from_cache_changed(settings, context):
+    # Ticked with nothing baked, the fluid would vanish: the switch goes back off and the status says why.
+    from . import update
+
+    if settings.use_cache and settings.is_surface and not update.has_cache_frames(settings.id_data):
+        settings.use_cache = False
+        settings.status = "Nothing baked yet in " + update.cache_pattern_string(settings.id_data) + \
+                          ": Bake Frame Range first, then Play From Cache"
+        settings.status_is_error = True
+        return
+    _rebuild_after_edit(settings, context)
 
 
 _OUT_OF_RANGE_ITEMS = [
@@ -137,10 +152,11 @@ class MeniscusSurfaceSettings(bpy.types.PropertyGroup):
     # Cache -------------------------------------------------------------------------------------------------------
     use_cache: BoolProperty(
         name="Play From Cache",
-        description="Load the baked meshes instead of reconstructing: scrubbing and rendering only read files",
+        description="Load the baked meshes instead of reconstructing: scrubbing and rendering only read files "
+                    "(frames the cache lacks are rebuilt from the particle files). Needs a bake first",
         default=False,
         options=set(),
-        update=_rebuild_after_edit,
+        update=_play_from_cache_changed,
     )
     cache_pattern: StringProperty(
         name="Cache Files",
@@ -196,6 +212,15 @@ class MeniscusSurfaceSettings(bpy.types.PropertyGroup):
         options={"HIDDEN"},
     )
 
+    render_failure: EnumProperty(
+        name="If a Frame Fails",
+        description="What a final render does with a frame whose surface cannot be built (a missing or broken file, "
+                    "memory). The viewport always shows such a frame empty, with the reason in the status",
+        items=render_policy.ITEMS,
+        default=render_policy.STOP,
+        options=set(),
+    )
+
     # Feedback (written by the frame handler) ---------------------------------------------------------------------
     status: StringProperty(
         name="Status",
@@ -223,6 +248,12 @@ def _ui_minimum(parameter, precision):
     return parameter.minimum + (10.0 ** -precision if parameter.minimum_open else 0.0)
 
 
+def _hard_minimum(parameter, precision):
+    # An open bound (radius > 0) is not enforced by Blender: it would turn a typed 0 into 0.0001 without a word (a
+    # blob per particle, seconds a frame). The value is kept and refused, with the panel's label, when it is used.
+    return -sys.float_info.max if parameter.minimum_open else _ui_minimum(parameter, precision)
+
+
 def parameter_property(parameter, default=None, name=None, description=None):
     """The bpy property of a schema parameter (default: the schema's, or its suggested value where that is
     automatic or required)."""
@@ -241,7 +272,7 @@ def parameter_property(parameter, default=None, name=None, description=None):
     elif parameter.minimum >= 0.0 and parameter.maximum <= 1.0:
         extra = dict(subtype="FACTOR")
     maximum = parameter.maximum if parameter.maximum < sys.float_info.max else sys.float_info.max
-    return FloatProperty(default=float(value), min=_ui_minimum(parameter, precision), max=maximum,
+    return FloatProperty(default=float(value), min=_hard_minimum(parameter, precision), max=maximum,
                          soft_min=max(parameter.soft_minimum, _ui_minimum(parameter, precision)),
                          soft_max=parameter.soft_maximum, precision=precision, **common, **extra)
 
@@ -304,6 +335,51 @@ def argument_problems(arguments, for_render=True):
         if problem:
             problems.append(f"{label_of(name, for_render)} {problem}")
     return problems
+
+
+_LONG_NUMBER = re.compile(r"-?\d{10,}(?:\.\d+)?")
+_CLI_FLAG = re.compile(r" \((?:-\w, ?)?--[\w-]+\)")
+
+
+def in_panel_terms(message, for_render=True):
+    """A message of the core in the panel's words: parameter names become their labels ('pass skip_invalid
+    (--skip-invalid)' -> "turn on 'Skip Invalid Particles'"), command-line flags go, and numbers printed with dozens
+    of digits are shortened (3.4e+38)."""
+    message = _CLI_FLAG.sub("", message)
+    # Only the identifiers (skip_invalid): single words (threads, normals) are also plain English.
+    names = sorted((p.name for p in parameters.PARAMETERS if "_" in p.name), key=len, reverse=True)
+    message = re.sub(r"\bpass (" + "|".join(names) + r")\b", r"turn on \1", message)
+    message = re.sub(r"\b(" + "|".join(names) + r")\b", lambda m: f"'{label_of(m.group(1), for_render)}'", message)
+    return _LONG_NUMBER.sub(lambda m: f"{float(m.group(0)):.3g}", message)
+
+
+def automatic_meaning(name):
+    """What an automatic value means on this machine, for the panel: 'all 16 cores', '75 % of 31.2 GiB'."""
+    if name == "threads":
+        limit = os.environ.get("OMP_NUM_THREADS", "").split(",")[0]
+        return f"{limit} (OMP_NUM_THREADS)" if limit.isdigit() else f"all {os.cpu_count() or 1} cores"
+    if name == "memory_budget":
+        installed = _installed_memory()
+        return f"75 % of {installed / 2 ** 30:.1f} GiB" if installed else "75 % of the installed memory"
+    return parameters.BY_NAME[name].automatic_word
+
+
+def _installed_memory():
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):  # Windows has no sysconf
+        pass
+    try:
+        import ctypes
+
+        class _MemoryStatus(ctypes.Structure):
+            _fields_ = [("length", ctypes.c_ulong), ("load", ctypes.c_ulong), ("total", ctypes.c_ulonglong),
+                        ("available", ctypes.c_ulonglong), ("rest", ctypes.c_ulonglong * 5)]
+
+        status = _MemoryStatus(length=ctypes.sizeof(_MemoryStatus))
+        return status.total if ctypes.windll.kernel32.GlobalMemoryStatusEx(ctypes.byref(status)) else 0
+    except Exception:
+        return 0
 
 
 # Settings of files saved before the schema (layout 0) -------------------------------------------------------------
