@@ -163,4 +163,5 @@ def unregister():
     for handler_list, function in _handler_slots():
         _remove_ours(handler_list, function)
     update.forget_cached_state()
+    update.stop_background_work()
     render_state.set_rendering(False)

@@ -31,6 +31,7 @@ def _rebuild_after_edit(settings, context):
 
     if not settings.is_surface:  # the add operator fills many fields before it turns the object into a surface
         return
+    update.forget_frames(settings.id_data)  # frames kept for playback were built with the old values
     scene = getattr(context, "scene", None) or bpy.context.scene
     if scene is not None:
         update.update_surface(settings.id_data, scene)

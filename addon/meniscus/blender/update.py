@@ -15,7 +15,7 @@ import traceback
 
 import bpy
 
-from .. import api, cache, sequence
+from .. import api, cache, playback, sequence
 from . import mesh_update, properties, render_policy, render_state, sources
 from .surfaces import STATUS_LINE_SEPARATOR, is_surface, surface_objects  # noqa: F401  (re-exported for callers)
 
@@ -35,13 +35,36 @@ class _Memory:
         # Mesh pointer -> (rebuild key, whether a render has handled it) of a frame that could not be built: a
         # render must apply its policy even when the viewport already failed at the same key.
         self.failed = {}
+        # Reconstructed frames per mesh pointer (viewport playback; see playback), and the last scene frame each
+        # showed, which tells the direction to prefetch in.
+        self.frames = {}
+        self.last_frame = {}
+
+    def frame_cache(self, pointer):
+        frames = self.frames.get(pointer)
+        if frames is None:
+            frames = self.frames[pointer] = playback.FrameCache(PLAYBACK_MEMORY_BYTES)
+        return frames
+
     def forget(self):
         self.sequences.clear()
         self.shown.clear()
         self.last_error.clear()
         self.failed.clear()
+        for frames in self.frames.values():
+            _prefetcher.forget(frames)
+            frames.clear()
+        self.frames.clear()
+        self.last_frame.clear()
 
 
+# Playback: reconstructed frames kept per surface, up to this many bytes (scrubbing back is instant), and the next
+# PREFETCH_AHEAD frames in the direction of play built by one background thread (only bpy-free work runs there).
+PLAYBACK_MEMORY_BYTES = 1 << 30
+PREFETCH_AHEAD = 3
+# A frame change whose frame the worker is building waits for it this long rather than building it a second time.
+PREFETCH_WAIT_SECONDS = 5.0
+_prefetcher = playback.Prefetcher()
 _memory = _Memory()
 
 
@@ -54,6 +77,19 @@ def forget_cached_state():
     _memory.forget()
 
 
+def forget_frames(obj):
+    """Drops the frames kept for a surface and the work queued for it (its parameters changed)."""
+    try:
+        frames = _memory.frames.pop(obj.data.as_pointer(), None)
+    except Exception:  # no mesh (being removed)
+        return
+    if frames is not None:
+        _prefetcher.forget(frames)
+        frames.clear()
+
+
+def stop_background_work():
+    _prefetcher.stop()
 
 def _resolve(path_property, obj, what):
     if not path_property:
@@ -164,7 +200,9 @@ def _file_source(obj, settings, mesh, scene_time, for_render):
     def work():
         if lookup.path is None:
             return _empty_for(mesh, lookup, scene_time, "file")
-        return _build_file(mesh, settings, lookup.path, arguments, wanted, for_render)
+        if for_render:  # renders build every frame afresh, at their own cube size
+            return _build_file(mesh, settings, lookup.path, arguments, wanted, for_render)
+        return _play_file(obj, settings, mesh, scene_time, pattern, lookup, key, arguments, wanted)
 
     return key, work, lookup.expected_path
 
@@ -173,6 +211,43 @@ def _file_key(lookup, arguments, wanted, settings):
     # Everything the mesh depends on: the file (and its version on disk) and every reconstruction parameter.
     return ("FILES", lookup.file_frame, lookup.path, _file_version(lookup.path), tuple(sorted(arguments.items())),
             tuple(wanted), settings.use_custom_normals)
+
+
+def _play_file(obj, settings, mesh, scene_time, pattern, lookup, key, arguments, wanted):
+    """The viewport's frame: kept in memory, being built by the worker, or built now; then the next frames are
+    queued for the worker."""
+    pointer = mesh.as_pointer()
+    frames = _memory.frame_cache(pointer)
+    result = frames.get(key)
+    ready = result is not None
+    if result is None:
+        result = _prefetcher.wait_for(frames, key, PREFETCH_WAIT_SECONDS)
+    if result is None:
+        result = cache.reconstruct_file(lookup.path, arguments, wanted)
+        frames.put(key, result)
+    status = _show_reconstruction(mesh, settings, os.path.basename(lookup.path), result,
+                                  "ready in memory" if ready else "")
+    frame = sequence.nearest_frame(scene_time)
+    direction = -1 if frame < _memory.last_frame.get(pointer, frame) else 1
+    _memory.last_frame[pointer] = frame
+    _prefetch(frames, settings, pattern, frame, direction, arguments, wanted)
+    return status
+
+
+def _prefetch(frames, settings, pattern, frame, direction, arguments, wanted):
+    listing = _memory.sequences.frames(pattern)
+    jobs = []
+    for step in range(1, PREFETCH_AHEAD + 1):
+        try:
+            lookup = _lookup(listing, pattern, frame + direction * step, settings)
+        except SurfaceError:
+            break
+        if lookup.path is None:
+            continue
+        # Bound now: the worker reads only these plain values, never the settings.
+        jobs.append((_file_key(lookup, arguments, wanted, settings),
+                     lambda path=lookup.path: cache.reconstruct_file(path, dict(arguments), wanted)))
+    _prefetcher.want(frames, jobs)
 
 
 def _build_file(mesh, settings, path, arguments, wanted, for_render):
@@ -227,12 +302,13 @@ def _object_source(obj, settings, mesh, depsgraph, for_render):
     return key, work, f"object '{source.name}'"
 
 
-def _show_reconstruction(mesh, settings, label, result):
+def _show_reconstruction(mesh, settings, label, result, note=""):
     """Writes a reconstruction (from files or from an object) into the mesh; returns the status lines."""
     blender_seconds, attribute_note = _write(mesh, settings, result.mesh)
-    return _status_lines(label, f"{result.particle_count:,} particles", _face_counts(result.mesh),
-                         f"{result.seconds:.2f} s + {blender_seconds:.2f} s in Blender", _missing_note(result),
-                         attribute_note)
+    timing = f"{blender_seconds:.2f} s in Blender, {note}" if note else \
+        f"{result.seconds:.2f} s + {blender_seconds:.2f} s in Blender"
+    return _status_lines(label, f"{result.particle_count:,} particles", _face_counts(result.mesh), timing,
+                         _missing_note(result), attribute_note)
 
 
 def _lookup(frames, pattern, scene_time, settings):
