@@ -19,14 +19,20 @@ from _support import check  # noqa: E402
 arguments = sys.argv[sys.argv.index("--") + 1:]
 ZIP, KIND = os.path.abspath(arguments[0]), arguments[1]
 addon = _support.enable_addon()
-core_copy = _support.addon_modules(addon, "core_copy")
 _temporary = tempfile.TemporaryDirectory(prefix="meniscus_update_")
 _support.clear_scene()
 scene = bpy.context.scene
 
 
 def installed_core():
-    return core_copy.core_file(os.path.dirname(addon.api.__file__))
+    """The core file the installer wrote, beside the library's modules."""
+    import importlib.machinery
+
+    folder = os.path.dirname(addon.api.__file__)
+    found = [os.path.join(folder, "_core" + suffix) for suffix in importlib.machinery.EXTENSION_SUFFIXES
+             if os.path.isfile(os.path.join(folder, "_core" + suffix))]
+    check(len(found) >= 1, f"no core for this Python in {folder}")
+    return found[0]
 
 
 def build_and_count(frame):
