@@ -8,6 +8,7 @@ Rules the update lives by (it runs inside Blender's frame change, also on the re
 - it skips the rebuild when the file and parameters are those already shown, which makes motion-blur subframes and
   repeated depsgraph updates free.
 """
+import atexit
 import contextlib
 import os
 import time
@@ -65,6 +66,9 @@ PREFETCH_AHEAD = 3
 # A frame change whose frame the worker is building waits for it this long rather than building it a second time.
 PREFETCH_WAIT_SECONDS = 5.0
 _prefetcher = playback.Prefetcher()
+# Blender quits without unregistering add-ons: a worker still inside the core when Python finalizes would be torn
+# down mid-call (std::terminate). Stopping it at exit waits for the frame under way.
+atexit.register(_prefetcher.stop)
 _memory = _Memory()
 
 
