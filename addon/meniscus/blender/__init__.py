@@ -5,10 +5,10 @@ Laid out like Blender's own add-ons: properties (data, made from the parameter s
 surface for the current frame), surfaces (adding surface objects), render_state, sources (live objects), mesh_update
 (writing meshes: every Blender version difference) and material (the default water material).
 """
-from . import app_handlers, bake, operators, panels, properties
+from . import app_handlers, bake, native_cache, operators, panels, properties
 
 # Registration order matters: panels and operators refer to the properties, handlers use all of them.
-_modules = (properties, operators, bake, panels, app_handlers)
+_modules = (properties, operators, bake, native_cache, panels, app_handlers)
 _registered = False
 
 

@@ -146,6 +146,12 @@ class MENISCUS_PT_cache(_SurfacePanel, bpy.types.Panel):
         row = layout.row()
         row.enabled = settings.use_cache or update.has_cache_frames(obj)  # nothing baked: nothing to play
         row.prop(settings, "use_cache")
+        # Renders on machines without the add-on: the frames as an Alembic file that Blender plays by itself.
+        if settings.use_native_cache:
+            layout.label(text="Plays its Alembic file (no Meniscus needed)", icon="CHECKMARK")
+            layout.operator("meniscus.remove_alembic", icon="X").object_name = obj.name
+        else:
+            layout.operator("meniscus.export_alembic", icon="EXPORT").object_name = obj.name
 
 
 def _is_on(settings, name):

@@ -213,6 +213,13 @@ class MeniscusSurfaceSettings(bpy.types.PropertyGroup):
         options={"HIDDEN"},
     )
 
+    use_native_cache: BoolProperty(
+        name="Plays Alembic",
+        description="The surface plays the Alembic file it was exported to (Mesh Sequence Cache modifier), which "
+                    "Blender reads without Meniscus; Meniscus does not rebuild it meanwhile",
+        default=False,
+        options=set(),
+    )
     render_failure: EnumProperty(
         name="If a Frame Fails",
         description="What a final render does with a frame whose surface cannot be built (a missing or broken file, "

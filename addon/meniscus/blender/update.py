@@ -357,6 +357,8 @@ def update_surface(obj, scene, force=False, depsgraph=None):
         return False
     try:
         settings = obj.meniscus
+        if settings.use_native_cache:  # the Mesh Sequence Cache modifier plays the exported file (native_cache)
+            return False
         mesh = obj.data
         if obj.mode == "EDIT" or mesh.is_editmode:
             return False
