@@ -15,7 +15,7 @@ import os
 
 import bpy
 
-from . import surfaces, update
+from . import mesh_update, surfaces, update
 
 MODIFIER_NAME = "Meniscus Alembic"
 
@@ -96,14 +96,23 @@ def _play(obj, filepath):
         if result != {"FINISHED"} or source is None:
             raise NativeCacheError(f"Blender could not read back {filepath}")
         modifier = obj.modifiers.new(MODIFIER_NAME, "MESH_SEQUENCE_CACHE")
-        modifier.cache_file = source.cache_file
-        modifier.object_path = source.object_path
+        # Everything the importer set (cache file, object path, which data to read: 4.5 reads velocities only
+        # where the importer asked for them).
+        for prop in source.bl_rna.properties:
+            if not prop.is_readonly and prop.identifier not in ("name", "show_expanded", "is_active"):
+                try:
+                    setattr(modifier, prop.identifier, getattr(source, prop.identifier))
+                except (AttributeError, TypeError, ValueError):
+                    pass
     finally:
         for other in imported:
             mesh = other.data
             bpy.data.objects.remove(other, do_unlink=True)
             if mesh is not None and mesh.users == 0:
                 bpy.data.meshes.remove(mesh)
+    # The modifier replaces the geometry: the mesh under it is emptied (4.5 would otherwise keep its stale 'velocity'
+    # beside the file's, renamed 'velocity.001', and the .blend would carry a frame for nothing).
+    mesh_update.clear_surface(obj.data)
     obj.meniscus.use_native_cache = True
 
 
