@@ -30,8 +30,10 @@ def _fresh_library(library):
     the installer never overwrites (see core_copy)."""
     import importlib.util
 
-    import bpy
-
+    try:
+        import bpy
+    except ImportError:  # the legacy folder used as a plain Python library, outside Blender: nothing to update
+        return
     for name in [name for name in sys.modules if name.startswith(library + ".") or
                  (name == library and library != __name__)]:
         if name != __name__ + ".core_copy":
@@ -49,13 +51,15 @@ def _fresh_library(library):
 
 if os.path.exists(os.path.join(os.path.dirname(__file__), "api.py")):  # legacy zip: the library is bundled here
     _fresh_library(__name__)
-    from . import api, cache, parameters, playback, sequence  # noqa: F401
+    from . import api, cache, parameters, sequence  # noqa: F401
+    from . import playback  # noqa: F401
     # Scripts in every Blender can then write `import meniscus; meniscus.reconstruct(...)`: here `meniscus` is this
     # add-on, in 4.2+ the library itself.
     from .api import *  # noqa: F401,F403
 else:  # extension: the wheel Blender installed
     _fresh_library("meniscus")
-    from meniscus import api, cache, parameters, playback, sequence  # noqa: F401
+    from meniscus import api, cache, parameters, sequence  # noqa: F401
+    from meniscus import playback  # noqa: F401
 
 
 def register():
