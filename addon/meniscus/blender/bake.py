@@ -17,7 +17,7 @@ from bpy.props import BoolProperty, IntProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
 from .. import cache, sequence
-from . import container, operators, properties, surfaces, update
+from . import arguments as pipeline, container, operators, surfaces, update
 
 # Running UI bakes by object name (names, not references: undo and file loads invalidate object references).
 _jobs = {}
@@ -127,7 +127,7 @@ def _failure_note(job):
     if not job.failures:
         return ""
     first_frame = min(job.failures)
-    reason = properties.in_panel_terms(str(job.failures[first_frame]))
+    reason = pipeline.in_panel_terms(str(job.failures[first_frame]))
     return f"; {len(job.failures)} failed, first {first_frame}: {reason}"
 
 
@@ -278,7 +278,7 @@ class MENISCUS_OT_add_cache(bpy.types.Operator, ImportHelper):
             settings.use_cache = True
             settings.frame_start, settings.frame_end = first, last
 
-        obj = surfaces.add_surface_object(context, pattern.prefix.rstrip("_-. ") or "Fluid Cache", configure)
+        obj = operators.add_surface_object(context, pattern.prefix.rstrip("_-. ") or "Fluid Cache", configure)
         self.report({"INFO"}, f"Added '{obj.name}': {len(frames)} cached frames ({first}-{last})")
         return {"FINISHED"}
 

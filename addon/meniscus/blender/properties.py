@@ -7,28 +7,23 @@ with an automatic value gets a `<name>_auto` switch beside it); the rest are the
 from, the cache, the viewport cube size, custom normals, which attributes to carry.
 """
 import os
-import re
 import sys
 
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
 from .. import cache, parameters, sequence
-from . import container, render_policy
+from . import render_policy, update
+# Re-exported: callers read the constants and these functions as properties.<name>.
+from .arguments import (DRIVEN_BY_ADDON, RENDER_CUBE_SIZE, argument_problems, in_panel_terms,  # noqa: F401
+                        label_of, pipeline_arguments)
 
 # The layout of the settings, stored in each surface; files saved before the schema (0) are converted on load.
 SETTINGS_VERSION = 3
-# Pipeline parameters the add-on sets itself: normals follow "Custom Normals", cube_size has a viewport and a
-# render value (`cube_size` and `render_cube_size`, the names .blend files already have).
-DRIVEN_BY_ADDON = {"normals", "cube_size"}
-RENDER_CUBE_SIZE = "render_cube_size"
 
 
 def _rebuild_after_edit(settings, context):
-    # Editing a parameter in the UI should show its effect at once, not at the next frame change. The import is
-    # local because the updater imports this module (for the settings' type); the cycle is harmless at call time.
-    from . import update
-
+    # Editing a parameter in the UI should show its effect at once, not at the next frame change.
     if not settings.is_surface:  # the add operator fills many fields before it turns the object into a surface
         return
     update.forget_frames(settings.id_data)  # frames kept for playback were built with the old values
@@ -39,8 +34,6 @@ def _rebuild_after_edit(settings, context):
 
 def _play_from_cache_changed(settings, context):
     # Ticked with nothing baked, the fluid would vanish: the switch goes back off and the status says why.
-    from . import update
-
     if settings.use_cache and settings.is_surface and not update.has_cache_frames(settings.id_data):
         settings.use_cache = False
         settings.status = "Nothing baked yet in " + update.cache_pattern_string(settings.id_data) + \
@@ -303,62 +296,6 @@ def _add_pipeline_properties(cls):
 
 
 _add_pipeline_properties(MeniscusSurfaceSettings)
-
-
-def pipeline_arguments(settings, for_render, normals=None):
-    """api.reconstruct's keyword arguments from a surface's settings: every schema parameter, automatic ones at
-    their automatic value when switched so, the render or the viewport cube size, normals when custom normals are on
-    (or as given)."""
-    arguments = {}
-    for parameter in parameters.PARAMETERS:
-        if parameter.name in DRIVEN_BY_ADDON:
-            continue
-        if parameter.type == "vector3":  # boxes: from the container object, below
-            continue
-        value = getattr(settings, parameter.name)
-        if parameter.automatic is not None and getattr(settings, parameter.name + "_auto"):
-            value = parameters.convert(parameter, parameter.automatic)
-        arguments[parameter.name] = value
-    arguments.update(container.box_arguments(settings))
-    arguments["cube_size"] = getattr(settings, RENDER_CUBE_SIZE) if for_render else settings.cube_size
-    arguments["normals"] = settings.use_custom_normals if normals is None else normals
-    return arguments
-
-
-def label_of(name, for_render=True):
-    """The label under which the panel shows a pipeline parameter."""
-    if name == "cube_size":
-        return "Render Cube Size" if for_render else "Viewport Cube Size"
-    if name == "normals":
-        return "Custom Normals"
-    return parameters.BY_NAME[name].label
-
-
-def argument_problems(arguments, for_render=True):
-    """What is wrong with the arguments, in the panel's words ('Smoothing Strength must be a number greater than 0
-    and at most 1, got 0'): the add-on checks before the core is called, so a user never sees an internal name."""
-    problems = []
-    for name, value in arguments.items():
-        problem = parameters.BY_NAME[name].problem(value)
-        if problem:
-            problems.append(f"{label_of(name, for_render)} {problem}")
-    return problems
-
-
-_LONG_NUMBER = re.compile(r"-?\d{10,}(?:\.\d+)?")
-_CLI_FLAG = re.compile(r" \((?:-\w, ?)?--[\w-]+\)")
-
-
-def in_panel_terms(message, for_render=True):
-    """A message of the core in the panel's words: parameter names become their labels ('pass skip_invalid
-    (--skip-invalid)' -> "turn on 'Skip Invalid Particles'"), command-line flags go, and numbers printed with dozens
-    of digits are shortened (3.4e+38)."""
-    message = _CLI_FLAG.sub("", message)
-    # Only the identifiers (skip_invalid): single words (threads, normals) are also plain English.
-    names = sorted((p.name for p in parameters.PARAMETERS if "_" in p.name), key=len, reverse=True)
-    message = re.sub(r"\bpass (" + "|".join(names) + r")\b", r"turn on \1", message)
-    message = re.sub(r"\b(" + "|".join(names) + r")\b", lambda m: f"'{label_of(m.group(1), for_render)}'", message)
-    return _LONG_NUMBER.sub(lambda m: f"{float(m.group(0)):.3g}", message)
 
 
 def automatic_meaning(name):

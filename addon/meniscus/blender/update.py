@@ -17,7 +17,7 @@ import traceback
 import bpy
 
 from .. import api, cache, playback, sequence
-from . import mesh_update, properties, render_policy, render_state, sources
+from . import arguments as pipeline, mesh_update, render_policy, render_state, sources
 from .surfaces import STATUS_LINE_SEPARATOR, is_surface, surface_objects  # noqa: F401  (re-exported for callers)
 
 
@@ -143,8 +143,8 @@ def has_cache_frames(obj):
 def reconstruction_arguments(settings, for_render, normals=None):
     """api.reconstruct's keyword arguments from a surface's settings; raises SurfaceError naming the panel's
     labels when a value is not allowed (the core would refuse it under its internal name)."""
-    arguments = properties.pipeline_arguments(settings, for_render, normals)
-    problems = properties.argument_problems(arguments, for_render)
+    arguments = pipeline.pipeline_arguments(settings, for_render, normals)
+    problems = pipeline.argument_problems(arguments, for_render)
     if problems:
         raise SurfaceError("; ".join(problems))
     return arguments
@@ -407,7 +407,7 @@ def update_surface(obj, scene, force=False, depsgraph=None):
         expected = isinstance(error, (SurfaceError, api.FormatError, OSError, MemoryError, ValueError))
         if isinstance(error, MemoryError) and not str(error):
             message = "Out of memory: use a larger cube size"
-        message = properties.in_panel_terms(message, for_render)
+        message = pipeline.in_panel_terms(message, for_render)
         if _memory.last_error.get(pointer) != message:  # once per distinct problem, not on every frame
             print(f"Meniscus: '{name}' at frame {frame}: {message}")
             if not expected:
