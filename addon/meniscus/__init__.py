@@ -19,14 +19,47 @@ bl_info = {
 }
 
 import os  # noqa: E402
+import sys  # noqa: E402
+
+from . import core_copy  # noqa: E402
+
+
+def _fresh_library(library):
+    """Prepares the import of the library package `library` (this package or the wheel's `meniscus`): modules left
+    by a previous install are dropped, so that an update runs its own code, and the core is loaded from a copy that
+    the installer never overwrites (see core_copy)."""
+    import importlib.util
+
+    try:
+        import bpy
+    except ImportError:  # the legacy folder used as a plain Python library, outside Blender: nothing to update
+        return
+    for name in [name for name in sys.modules if name.startswith(library + ".") or
+                 (name == library and library != __name__)]:
+        if name != __name__ + ".core_copy":
+            del sys.modules[name]
+    spec = importlib.util.find_spec(library) if library != __name__ else None
+    if library != __name__ and (spec is None or not spec.origin):  # no wheel installed: the import says so
+        return
+    package_dir = os.path.dirname(__file__ if spec is None else spec.origin)
+    copies = bpy.utils.user_resource("DATAFILES", path=os.path.join("meniscus", "cores"), create=True)
+    try:
+        core_copy.load(library + "._core", package_dir, copies)
+    except OSError as error:  # no writable folder: the core loads in place, as before
+        print(f"Meniscus: loading the core in place ({error})")
+
 
 if os.path.exists(os.path.join(os.path.dirname(__file__), "api.py")):  # legacy zip: the library is bundled here
+    _fresh_library(__name__)
     from . import api, cache, parameters, sequence  # noqa: F401
+    from . import playback  # noqa: F401
     # Scripts in every Blender can then write `import meniscus; meniscus.reconstruct(...)`: here `meniscus` is this
     # add-on, in 4.2+ the library itself.
     from .api import *  # noqa: F401,F403
 else:  # extension: the wheel Blender installed
+    _fresh_library("meniscus")
     from meniscus import api, cache, parameters, sequence  # noqa: F401
+    from meniscus import playback  # noqa: F401
 
 
 def register():

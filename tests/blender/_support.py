@@ -84,6 +84,55 @@ def add_sample_sequence(path=None, **options):
     return added[0]
 
 
+def make_small_render(scene, filepath=None):
+    """A camera on the sample and the cheapest Cycles render that still runs every render handler (1 sample, 32 x 18
+    pixels), writing PNGs to filepath when given."""
+    import math
+
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    scene.collection.objects.link(camera)
+    camera.location = (1.5, -3.5, 2.0)
+    camera.rotation_euler = (math.radians(65), 0.0, 0.0)
+    scene.camera = camera
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = 1
+    scene.cycles.use_denoising = False
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 32, 18, 100
+    if filepath:
+        scene.render.filepath = filepath
+        scene.render.image_settings.file_format = "PNG"
+
+
+def render_in_new_process(blend, first, last=None, report=None, timeout=180):
+    """Renders a saved .blend in a new process as a render farm node does: `blender -b scene.blend -f FIRST` (or
+    -s FIRST -e LAST -a); as a bpy module, the same through bpy.ops.render.render(animation=True).
+    The add-on comes from the saved preferences (the executable) or is enabled by name (a pipeline script on the
+    module). report: an expression of an object whose first status line and face count are printed after each
+    rendered frame, as 'RENDERED <status> <faces>'. Returns the CompletedProcess (stdout holds stderr too)."""
+    import subprocess
+
+    reporter = ""
+    if report:  # registered after the file is open: loading a file drops handlers that are not persistent
+        reporter = ("def _report(scene, *_args):\n"
+                    f"    obj = {report}\n"
+                    "    print('RENDERED', obj.meniscus.status.splitlines()[0], len(obj.data.polygons), flush=True)\n"
+                    "bpy.app.handlers.render_post.append(_report)\n")
+    if AS_MODULE:
+        # Factory settings and the add-on by name (see test_bake); os._exit as in run(): the teardown may crash.
+        opening = (f"import addon_utils, os\naddon_utils.enable({addon_module_name()!r}, default_set=True)\n"
+                   f"bpy.ops.wm.open_mainfile(filepath={blend!r})\n")
+        # An animation of one frame for a single frame: what -f does (a still would not number its file).
+        render = (f"bpy.context.scene.frame_start, bpy.context.scene.frame_end = {first}, {first if last is None else last}\n"
+                  "bpy.ops.render.render(animation=True)\n")
+        code = "import bpy, sys\n" + opening + reporter + render + "sys.stdout.flush()\nos._exit(0)\n"
+        command = [sys.executable, "-c", code]
+    else:
+        frames = ["-f", str(first)] if last is None else ["-s", str(first), "-e", str(last), "-a"]
+        command = [bpy.app.binary_path, "-b", blend, "--python-expr", "import bpy, sys\n" + reporter] + frames
+    return subprocess.run(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=timeout)
+
+
 def mesh_counts(obj):
     return len(obj.data.vertices), len(obj.data.polygons)
 

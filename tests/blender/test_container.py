@@ -143,6 +143,24 @@ def test_drop_particles_outside_and_no_container():
     check(not vertices_inside(box_low, box_high), "without a container the surface is not cut")
 
 
+def test_opening_a_saved_file_builds_inside_the_container():
+    # Blender 4.2+ saves no world matrices: the load handler must not build before the scene is evaluated, or the
+    # container is the unit cube at the origin until the frame changes.
+    settings.container_object = cube
+    scene.frame_set(30)
+    built = _support.mesh_counts(surface)
+    blend = os.path.join(_temporary.name, "tank.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=blend)
+    surface_name = surface.name
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    loaded = bpy.data.objects[surface_name]
+    lower, upper = container.world_bounds(loaded.meniscus.container_object.bound_box,
+                                          loaded.meniscus.container_object.matrix_world)
+    np.testing.assert_allclose(lower, box_low, atol=1e-5)
+    check(_support.mesh_counts(loaded) == built, f"after opening: {_support.mesh_counts(loaded)}, saved with {built}; "
+                                                 f"{loaded.meniscus.status}")
+
+
 def _cleanup():
     _temporary.cleanup()
     addon.unregister()

@@ -4,7 +4,6 @@ import sys
 import tempfile
 
 import bpy
-import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import _support  # noqa: E402
@@ -20,16 +19,6 @@ surface.meniscus.render_cube_size = 1.0
 
 
 def test_animation_render_with_motion_blur():
-    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    scene.collection.objects.link(camera)
-    camera.location = (1.5, -3.5, 2.0)
-    camera.rotation_euler = (np.radians(65), 0.0, 0.0)
-    scene.camera = camera
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = 1
-    scene.cycles.use_denoising = False
-    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 32, 18, 100
     scene.render.use_motion_blur = True
     scene.frame_start, scene.frame_end = 29, 31
     # What the surface showed when each frame was written (the render restores the scene frame afterwards).
@@ -41,8 +30,7 @@ def test_animation_render_with_motion_blur():
     bpy.app.handlers.render_write.append(record)
     try:
         with tempfile.TemporaryDirectory(prefix="meniscus_anim_") as folder:
-            scene.render.filepath = os.path.join(folder, "frame_####")
-            scene.render.image_settings.file_format = "PNG"
+            _support.make_small_render(scene, os.path.join(folder, "frame_####"))
             bpy.ops.render.render(animation=True)
             written = sorted(os.listdir(folder))
             check(written == ["frame_0029.png", "frame_0030.png", "frame_0031.png"], written)

@@ -89,7 +89,19 @@ def meniscus_load_post(*_args):
     update.forget_cached_state()
     _migrate_all_settings()
     _append_once(bpy.app.handlers.frame_change_post, meniscus_frame_change_post)
+    _evaluate_loaded_scene()
     _update_current_scene()
+
+
+def _evaluate_loaded_scene():
+    # Since Blender 4.2 an object's world matrix is not saved in the .blend: until the scene is evaluated, a freshly
+    # loaded container sits at the origin with identity scale, and the surface would be cut by a wrong box.
+    try:
+        view_layer = bpy.context.view_layer
+        if view_layer is not None:
+            view_layer.update()
+    except Exception:
+        traceback.print_exc()
 
 
 @persistent
@@ -151,4 +163,5 @@ def unregister():
     for handler_list, function in _handler_slots():
         _remove_ours(handler_list, function)
     update.forget_cached_state()
+    update.stop_background_work()
     render_state.set_rendering(False)

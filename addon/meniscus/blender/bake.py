@@ -17,7 +17,7 @@ from bpy.props import BoolProperty, IntProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
 from .. import cache, sequence
-from . import container, operators, surfaces, update
+from . import arguments as pipeline, container, operators, surfaces, update
 
 # Running UI bakes by object name (names, not references: undo and file loads invalidate object references).
 _jobs = {}
@@ -119,10 +119,16 @@ def finish_bake(obj, job, stored_pattern, scene=None):
     summary = f"Baked {written} of {job.total} frames in {job.seconds:.1f} s"
     if job.cancelled:
         summary += " (cancelled)"
-    if job.failures:
-        first_frame = min(job.failures)
-        summary += f"; {len(job.failures)} failed, first {first_frame}: {job.failures[first_frame]}"
-    return summary
+    return summary + _failure_note(job)
+
+
+def _failure_note(job):
+    """Why frames failed, in the words of the first failure (the others are usually the same)."""
+    if not job.failures:
+        return ""
+    first_frame = min(job.failures)
+    reason = pipeline.in_panel_terms(str(job.failures[first_frame]))
+    return f"; {len(job.failures)} failed, first {first_frame}: {reason}"
 
 
 def bake_surface(obj, scene=None, frame_start=None, frame_end=None, report=print):
@@ -173,7 +179,8 @@ class MENISCUS_OT_bake(bpy.types.Operator):
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         written = job.completed - len(job.failures)
-        self.report({"INFO"} if written else {"ERROR"}, f"Baked {written} of {job.total} frames")
+        # The reason goes into the report too: a script or a headless bake sees only this line.
+        self.report({"INFO"} if written else {"ERROR"}, f"Baked {written} of {job.total} frames" + _failure_note(job))
         return {"FINISHED"} if written else {"CANCELLED"}
 
     def invoke(self, context, _event):
@@ -271,7 +278,7 @@ class MENISCUS_OT_add_cache(bpy.types.Operator, ImportHelper):
             settings.use_cache = True
             settings.frame_start, settings.frame_end = first, last
 
-        obj = surfaces.add_surface_object(context, pattern.prefix.rstrip("_-. ") or "Fluid Cache", configure)
+        obj = operators.add_surface_object(context, pattern.prefix.rstrip("_-. ") or "Fluid Cache", configure)
         self.report({"INFO"}, f"Added '{obj.name}': {len(frames)} cached frames ({first}-{last})")
         return {"FINISHED"}
 

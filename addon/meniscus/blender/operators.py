@@ -6,10 +6,38 @@ from bpy.props import BoolProperty, FloatProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
 from .. import sequence
-from . import surfaces, update
+from . import app_handlers, material, properties, surfaces, update
 
 # The formats the core reads (each also gzip-compressed), for the file browser's filter.
 PARTICLE_FILE_GLOB = "*.vtk;*.vtu;*.vtp;*.bgeo;*.bhclassic;*.ply;*.npy;*.npz;*.csv;*.xyz;*.gz"
+
+
+def add_surface_object(context, name, configure):
+    """Adds a surface object to the active collection, selected and active, and builds its current frame.
+
+    configure(settings) fills the object's Meniscus settings before it becomes a surface (until is_surface is set,
+    the settings' update callbacks do not rebuild once per field). Returns the object.
+    """
+    scene = context.scene
+    mesh = bpy.data.meshes.new(name)
+    obj = bpy.data.objects.new(mesh.name, mesh)
+    (context.collection or scene.collection).objects.link(obj)
+    material.assign_material(mesh, material.ensure_water_material())
+    settings = obj.meniscus
+    settings.settings_version = properties.SETTINGS_VERSION
+    configure(settings)
+    settings.is_surface = True
+    # The frame handler edits meshes while a render runs; locking the interface keeps the UI from reading them at
+    # the same time (a crash otherwise).
+    scene.render.use_lock_interface = True
+    app_handlers.ensure_registered()
+    update.update_surface(obj, scene, force=True)
+    for other in getattr(context, "selected_objects", ()):
+        other.select_set(False)
+    if context.view_layer.objects.get(obj.name) is not None:
+        obj.select_set(True)
+        context.view_layer.objects.active = obj
+    return obj
 
 
 def _object_name(pattern):
@@ -69,8 +97,9 @@ class MENISCUS_OT_add_sequence(bpy.types.Operator, ImportHelper):
     )
     use_scene_frame_range: BoolProperty(
         name="Set Scene Frame Range",
-        description="Set the scene's start and end frames to the frames found on disk",
-        default=False,
+        description="Set the scene's start and end frames to the frames found on disk (minus the surface's "
+                    "frame offset)",
+        default=True,
     )
 
     def execute(self, context):
@@ -94,7 +123,7 @@ class MENISCUS_OT_add_sequence(bpy.types.Operator, ImportHelper):
 
         if self.use_scene_frame_range:
             scene.frame_start, scene.frame_end = first, last
-        obj = surfaces.add_surface_object(context, _object_name(pattern), configure)
+        obj = add_surface_object(context, _object_name(pattern), configure)
         settings = obj.meniscus
         status = settings.status.replace(surfaces.STATUS_LINE_SEPARATOR, ", ")
         self.report({"INFO"}, f"Added '{obj.name}': {len(frames)} frames ({first}-{last}). {status}")
@@ -189,7 +218,7 @@ class MENISCUS_OT_add_object_surface(bpy.types.Operator):
             settings.source_object = source
             settings.particle_radius = self.particle_radius
 
-        obj = surfaces.add_surface_object(context, f"{source.name} Surface", configure)
+        obj = add_surface_object(context, f"{source.name} Surface", configure)
         self.report({"INFO"}, f"Added '{obj.name}'")
         return {"FINISHED"}
 

@@ -7,14 +7,30 @@ from .. import parameters, sequence
 from . import bake, properties, surfaces, update
 
 
-def _wrap_lines(text, context):
-    """Splits text into its lines and wraps long ones to the sidebar's width."""
+def status_width(context):
+    """Characters of a label that fit the sidebar: about 8 pixels each at scale 1, less the icon column (an
+    estimate, on the safe side)."""
     region = getattr(context, "region", None)
-    # About 8 pixels per character at scale 1, less the icon column: an estimate, on the safe side.
     pixels = (region.width if region else 300) / max(context.preferences.system.ui_scale, 0.1)
-    width = max(16, int((pixels - 60) / 8))
+    return max(16, int((pixels - 60) / 8))
+
+
+def _shorten_word(word, width):
+    # A file name longer than the sidebar loses its middle, not its end: the frame number stays visible.
+    if len(word) <= width:
+        return word
+    head = max(3, width // 4)
+    return word[:head] + "\u2026" + word[-(width - head - 1):]
+
+
+def _wrap_lines(text, context, whole_words=False):
+    """Splits text into its lines and wraps long ones to the sidebar's width. whole_words: a word longer than a line
+    is shortened in its middle instead of being cut across lines."""
+    width = status_width(context)
     lines = []
     for line in text.split(surfaces.STATUS_LINE_SEPARATOR):
+        if whole_words:
+            line = " ".join(_shorten_word(word, width) for word in line.split(" "))
         lines.extend(textwrap.wrap(line, width) or [""])
     return lines
 
@@ -57,8 +73,9 @@ class MENISCUS_PT_main(_SidebarPanel, bpy.types.Panel):
         box.alert = settings.status_is_error
         column = box.column(align=True)
         text = settings.status or "Not built yet"
-        # Errors are wrapped so that the whole message (often a path) can be read; the normal status has short lines.
-        lines = _wrap_lines(text, context) if settings.status_is_error else text.split(surfaces.STATUS_LINE_SEPARATOR)
+        # Wrapped to the sidebar's width: errors (often a path) are read whole, and a long file name cannot hide the
+        # frame number at its end.
+        lines = _wrap_lines(text, context, whole_words=not settings.status_is_error)
         for index, line in enumerate(lines):
             icon = ("ERROR" if settings.status_is_error else "INFO") if index == 0 else "BLANK1"
             column.label(text=line, icon=icon)
@@ -126,8 +143,19 @@ class MENISCUS_PT_cache(_SurfacePanel, bpy.types.Panel):
             row = layout.row()
             row.enabled = settings.source_type == "FILES"
             row.operator("meniscus.bake", text="Bake Frame Range", icon="RENDER_ANIMATION").object_name = obj.name
-            row.operator("meniscus.export_farm_job", text="", icon="NETWORK_DRIVE").object_name = obj.name
-        layout.prop(settings, "use_cache")
+            # The same frames on a render farm: a job bundle and its parameters file; the surface then plays its output.
+            row = layout.row()
+            row.enabled = settings.source_type == "FILES"
+            row.operator("meniscus.export_farm_job", text="Export Farm Job", icon="NETWORK_DRIVE").object_name = obj.name
+        row = layout.row()
+        row.enabled = settings.use_cache or update.has_cache_frames(obj)  # nothing baked: nothing to play
+        row.prop(settings, "use_cache")
+        # Renders on machines without the add-on: the frames as an Alembic file that Blender plays by itself.
+        if settings.use_native_cache:
+            layout.label(text="Plays its Alembic file (no Meniscus needed)", icon="CHECKMARK")
+            layout.operator("meniscus.remove_alembic", icon="X").object_name = obj.name
+        else:
+            layout.operator("meniscus.export_alembic", icon="EXPORT").object_name = obj.name
 
 
 def _is_on(settings, name):
@@ -148,9 +176,11 @@ def draw_parameters(layout, settings, group):
         if parameter.automatic is not None:
             # [Neighbour Count 5.00][Auto]: the value greys out while the switch is on.
             row = column.row(align=True)
-            value = row.row(align=True)
-            value.active = not getattr(settings, parameter.name + "_auto")
-            value.prop(settings, parameter.name)
+            if getattr(settings, parameter.name + "_auto"):
+                # What Auto means here, not the greyed manual value, which it ignores.
+                row.label(text=f"{parameter.label}: {properties.automatic_meaning(parameter.name)}")
+            else:
+                row.prop(settings, parameter.name)
             row.prop(settings, parameter.name + "_auto", text="Auto", toggle=True)
         else:
             column.prop(settings, parameter.name)
@@ -181,6 +211,7 @@ class MENISCUS_PT_reconstruction(_ParameterPanel, bpy.types.Panel):
         col = layout.column(align=True)
         col.prop(settings, "cube_size")
         col.prop(settings, properties.RENDER_CUBE_SIZE)
+        layout.prop(settings, "render_failure")
 
 
 class MENISCUS_PT_smoothing(_ParameterPanel, bpy.types.Panel):
@@ -229,9 +260,6 @@ class MENISCUS_PT_performance(_ParameterPanel, bpy.types.Panel):
     bl_label = "Performance"
     bl_options = {"DEFAULT_CLOSED"}
     group = "execution"
-
-    def draw_after(self, layout, settings):
-        layout.prop(settings, "use_custom_normals", text="Custom Normals (slower playback)")
 
 
 classes = (MENISCUS_PT_main, MENISCUS_PT_source, MENISCUS_PT_cache, MENISCUS_PT_reconstruction,

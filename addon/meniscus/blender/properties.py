@@ -6,32 +6,41 @@ property per parameter, same name, label, tooltip, range and default as the API 
 with an automatic value gets a `<name>_auto` switch beside it); the rest are the add-on's own: where particles come
 from, the cache, the viewport cube size, custom normals, which attributes to carry.
 """
+import os
 import sys
 
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
 from .. import cache, parameters, sequence
-from . import container
+from . import render_policy, update
+# Re-exported: callers read the constants and these functions as properties.<name>.
+from .arguments import (DRIVEN_BY_ADDON, RENDER_CUBE_SIZE, argument_problems, in_panel_terms,  # noqa: F401
+                        label_of, pipeline_arguments)
 
 # The layout of the settings, stored in each surface; files saved before the schema (0) are converted on load.
 SETTINGS_VERSION = 3
-# Pipeline parameters the add-on sets itself: normals follow "Custom Normals", cube_size has a viewport and a
-# render value (`cube_size` and `render_cube_size`, the names .blend files already have).
-DRIVEN_BY_ADDON = {"normals", "cube_size"}
-RENDER_CUBE_SIZE = "render_cube_size"
 
 
 def _rebuild_after_edit(settings, context):
-    # Editing a parameter in the UI should show its effect at once, not at the next frame change. The import is
-    # local because the updater imports this module (for the settings' type); the cycle is harmless at call time.
-    from . import update
-
+    # Editing a parameter in the UI should show its effect at once, not at the next frame change.
     if not settings.is_surface:  # the add operator fills many fields before it turns the object into a surface
         return
+    update.forget_frames(settings.id_data)  # frames kept for playback were built with the old values
     scene = getattr(context, "scene", None) or bpy.context.scene
     if scene is not None:
         update.update_surface(settings.id_data, scene)
+
+
+def _play_from_cache_changed(settings, context):
+    # Ticked with nothing baked, the fluid would vanish: the switch goes back off and the status says why.
+    if settings.use_cache and settings.is_surface and not update.has_cache_frames(settings.id_data):
+        settings.use_cache = False
+        settings.status = "Nothing baked yet in " + update.cache_pattern_string(settings.id_data) + \
+                          ": Bake Frame Range first, then Play From Cache"
+        settings.status_is_error = True
+        return
+    _rebuild_after_edit(settings, context)
 
 
 _OUT_OF_RANGE_ITEMS = [
@@ -137,10 +146,11 @@ class MeniscusSurfaceSettings(bpy.types.PropertyGroup):
     # Cache -------------------------------------------------------------------------------------------------------
     use_cache: BoolProperty(
         name="Play From Cache",
-        description="Load the baked meshes instead of reconstructing: scrubbing and rendering only read files",
+        description="Load the baked meshes instead of reconstructing: scrubbing and rendering only read files "
+                    "(frames the cache lacks are rebuilt from the particle files). Needs a bake first",
         default=False,
         options=set(),
-        update=_rebuild_after_edit,
+        update=_play_from_cache_changed,
     )
     cache_pattern: StringProperty(
         name="Cache Files",
@@ -196,6 +206,22 @@ class MeniscusSurfaceSettings(bpy.types.PropertyGroup):
         options={"HIDDEN"},
     )
 
+    use_native_cache: BoolProperty(
+        name="Plays Alembic",
+        description="The surface plays the Alembic file it was exported to (Mesh Sequence Cache modifier), which "
+                    "Blender reads without Meniscus; Meniscus does not rebuild it meanwhile",
+        default=False,
+        options=set(),
+    )
+    render_failure: EnumProperty(
+        name="If a Frame Fails",
+        description="What a final render does with a frame whose surface cannot be built (a missing or broken file, "
+                    "memory). The viewport always shows such a frame empty, with the reason in the status",
+        items=render_policy.ITEMS,
+        default=render_policy.STOP,
+        options=set(),
+    )
+
     # Feedback (written by the frame handler) ---------------------------------------------------------------------
     status: StringProperty(
         name="Status",
@@ -223,6 +249,12 @@ def _ui_minimum(parameter, precision):
     return parameter.minimum + (10.0 ** -precision if parameter.minimum_open else 0.0)
 
 
+def _hard_minimum(parameter, precision):
+    # An open bound (radius > 0) is not enforced by Blender: it would turn a typed 0 into 0.0001 without a word (a
+    # blob per particle, seconds a frame). The value is kept and refused, with the panel's label, when it is used.
+    return -sys.float_info.max if parameter.minimum_open else _ui_minimum(parameter, precision)
+
+
 def parameter_property(parameter, default=None, name=None, description=None):
     """The bpy property of a schema parameter (default: the schema's, or its suggested value where that is
     automatic or required)."""
@@ -241,7 +273,7 @@ def parameter_property(parameter, default=None, name=None, description=None):
     elif parameter.minimum >= 0.0 and parameter.maximum <= 1.0:
         extra = dict(subtype="FACTOR")
     maximum = parameter.maximum if parameter.maximum < sys.float_info.max else sys.float_info.max
-    return FloatProperty(default=float(value), min=_ui_minimum(parameter, precision), max=maximum,
+    return FloatProperty(default=float(value), min=_hard_minimum(parameter, precision), max=maximum,
                          soft_min=max(parameter.soft_minimum, _ui_minimum(parameter, precision)),
                          soft_max=parameter.soft_maximum, precision=precision, **common, **extra)
 
@@ -266,44 +298,33 @@ def _add_pipeline_properties(cls):
 _add_pipeline_properties(MeniscusSurfaceSettings)
 
 
-def pipeline_arguments(settings, for_render, normals=None):
-    """api.reconstruct's keyword arguments from a surface's settings: every schema parameter, automatic ones at
-    their automatic value when switched so, the render or the viewport cube size, normals when custom normals are on
-    (or as given)."""
-    arguments = {}
-    for parameter in parameters.PARAMETERS:
-        if parameter.name in DRIVEN_BY_ADDON:
-            continue
-        if parameter.type == "vector3":  # boxes: from the container object, below
-            continue
-        value = getattr(settings, parameter.name)
-        if parameter.automatic is not None and getattr(settings, parameter.name + "_auto"):
-            value = parameters.convert(parameter, parameter.automatic)
-        arguments[parameter.name] = value
-    arguments.update(container.box_arguments(settings))
-    arguments["cube_size"] = getattr(settings, RENDER_CUBE_SIZE) if for_render else settings.cube_size
-    arguments["normals"] = settings.use_custom_normals if normals is None else normals
-    return arguments
+def automatic_meaning(name):
+    """What an automatic value means on this machine, for the panel: 'all 16 cores', '75 % of 31.2 GiB'."""
+    if name == "threads":
+        limit = os.environ.get("OMP_NUM_THREADS", "").split(",")[0]
+        return f"{limit} (OMP_NUM_THREADS)" if limit.isdigit() else f"all {os.cpu_count() or 1} cores"
+    if name == "memory_budget":
+        installed = _installed_memory()
+        return f"75 % of {installed / 2 ** 30:.1f} GiB" if installed else "75 % of the installed memory"
+    return parameters.BY_NAME[name].automatic_word
 
 
-def label_of(name, for_render=True):
-    """The label under which the panel shows a pipeline parameter."""
-    if name == "cube_size":
-        return "Render Cube Size" if for_render else "Viewport Cube Size"
-    if name == "normals":
-        return "Custom Normals"
-    return parameters.BY_NAME[name].label
+def _installed_memory():
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):  # Windows has no sysconf
+        pass
+    try:
+        import ctypes
 
+        class _MemoryStatus(ctypes.Structure):
+            _fields_ = [("length", ctypes.c_ulong), ("load", ctypes.c_ulong), ("total", ctypes.c_ulonglong),
+                        ("available", ctypes.c_ulonglong), ("rest", ctypes.c_ulonglong * 5)]
 
-def argument_problems(arguments, for_render=True):
-    """What is wrong with the arguments, in the panel's words ('Smoothing Strength must be a number greater than 0
-    and at most 1, got 0'): the add-on checks before the core is called, so a user never sees an internal name."""
-    problems = []
-    for name, value in arguments.items():
-        problem = parameters.BY_NAME[name].problem(value)
-        if problem:
-            problems.append(f"{label_of(name, for_render)} {problem}")
-    return problems
+        status = _MemoryStatus(length=ctypes.sizeof(_MemoryStatus))
+        return status.total if ctypes.windll.kernel32.GlobalMemoryStatusEx(ctypes.byref(status)) else 0
+    except Exception:
+        return 0
 
 
 # Settings of files saved before the schema (layout 0) -------------------------------------------------------------

@@ -8,6 +8,7 @@ Rules the update lives by (it runs inside Blender's frame change, also on the re
 - it skips the rebuild when the file and parameters are those already shown, which makes motion-blur subframes and
   repeated depsgraph updates free.
 """
+import atexit
 import contextlib
 import os
 import time
@@ -15,8 +16,8 @@ import traceback
 
 import bpy
 
-from .. import api, cache, sequence
-from . import mesh_update, properties, render_state, sources
+from .. import api, cache, playback, sequence
+from . import arguments as pipeline, mesh_update, render_policy, render_state, sources
 from .surfaces import STATUS_LINE_SEPARATOR, is_surface, surface_objects  # noqa: F401  (re-exported for callers)
 
 
@@ -32,13 +33,42 @@ class _Memory:
         self.shown = {}
         # Last error message per mesh pointer: the traceback is printed once, not on every frame.
         self.last_error = {}
+        # Mesh pointer -> (rebuild key, whether a render has handled it) of a frame that could not be built: a
+        # render must apply its policy even when the viewport already failed at the same key.
+        self.failed = {}
+        # Reconstructed frames per mesh pointer (viewport playback; see playback), and the last scene frame each
+        # showed, which tells the direction to prefetch in.
+        self.frames = {}
+        self.last_frame = {}
+
+    def frame_cache(self, pointer):
+        frames = self.frames.get(pointer)
+        if frames is None:
+            frames = self.frames[pointer] = playback.FrameCache(PLAYBACK_MEMORY_BYTES)
+        return frames
 
     def forget(self):
         self.sequences.clear()
         self.shown.clear()
         self.last_error.clear()
+        self.failed.clear()
+        for frames in self.frames.values():
+            _prefetcher.forget(frames)
+            frames.clear()
+        self.frames.clear()
+        self.last_frame.clear()
 
 
+# Playback: reconstructed frames kept per surface, up to this many bytes (scrubbing back is instant), and the next
+# PREFETCH_AHEAD frames in the direction of play built by one background thread (only bpy-free work runs there).
+PLAYBACK_MEMORY_BYTES = 1 << 30
+PREFETCH_AHEAD = 3
+# A frame change whose frame the worker is building waits for it this long rather than building it a second time.
+PREFETCH_WAIT_SECONDS = 5.0
+_prefetcher = playback.Prefetcher()
+# Blender quits without unregistering add-ons: a worker still inside the core when Python finalizes would be torn
+# down mid-call (std::terminate). Stopping it at exit waits for the frame under way.
+atexit.register(_prefetcher.stop)
 _memory = _Memory()
 
 
@@ -47,8 +77,23 @@ class SurfaceError(Exception):
 
 
 def forget_cached_state():
-    """Drops listings and the record of what meshes show, so the next update re-reads everything."""
+    """Drops listings, kept frames and the record of what meshes show, so the next update re-reads everything."""
     _memory.forget()
+
+
+def forget_frames(obj):
+    """Drops the frames kept for a surface and the work queued for it (its parameters changed)."""
+    try:
+        frames = _memory.frames.pop(obj.data.as_pointer(), None)
+    except Exception:  # no mesh (being removed)
+        return
+    if frames is not None:
+        _prefetcher.forget(frames)
+        frames.clear()
+
+
+def stop_background_work():
+    _prefetcher.stop()
 
 def _resolve(path_property, obj, what):
     if not path_property:
@@ -87,11 +132,19 @@ def available_cache_frames(obj):
     return _memory.sequences.frames(resolve_cache_pattern(obj))
 
 
+def has_cache_frames(obj):
+    """Whether a surface's cache folder holds any baked frame."""
+    try:
+        return bool(available_cache_frames(obj))
+    except (SurfaceError, OSError, ValueError):  # no cache folder (yet) or an unusable pattern
+        return False
+
+
 def reconstruction_arguments(settings, for_render, normals=None):
     """api.reconstruct's keyword arguments from a surface's settings; raises SurfaceError naming the panel's
     labels when a value is not allowed (the core would refuse it under its internal name)."""
-    arguments = properties.pipeline_arguments(settings, for_render, normals)
-    problems = properties.argument_problems(arguments, for_render)
+    arguments = pipeline.pipeline_arguments(settings, for_render, normals)
+    problems = pipeline.argument_problems(arguments, for_render)
     if problems:
         raise SurfaceError("; ".join(problems))
     return arguments
@@ -139,45 +192,98 @@ def _missing_note(result):
     return f"not in the particles: {', '.join(result.missing_attributes)}" if result.missing_attributes else ""
 
 
-# Sources: each returns (rebuild key, work) where work() fills the mesh and returns the status text -------------
+# Sources: each returns (rebuild key, work, what it reads) where work() fills the mesh and returns the status text --
 
 def _file_source(obj, settings, mesh, scene_time, for_render):
     pattern = resolve_pattern(obj)
     lookup = _lookup(_memory.sequences.frames(pattern), pattern, scene_time, settings)
     arguments = reconstruction_arguments(settings, for_render)
     wanted = cache.parse_attribute_names(settings.attribute_names)
-    # Everything the mesh depends on: the file (and its version on disk) and every reconstruction parameter.
-    key = ("FILES", lookup.file_frame, lookup.path, _file_version(lookup.path), tuple(sorted(arguments.items())),
-           tuple(wanted), settings.use_custom_normals)
+    key = _file_key(lookup, arguments, wanted, settings)
 
     def work():
         if lookup.path is None:
             return _empty_for(mesh, lookup, scene_time, "file")
+        if for_render:  # renders build every frame afresh, at their own cube size
+            return _build_file(mesh, settings, lookup.path, arguments, wanted, for_render)
+        return _play_file(obj, settings, mesh, scene_time, pattern, lookup, key, arguments, wanted)
+
+    return key, work, lookup.expected_path
+
+
+def _file_key(lookup, arguments, wanted, settings):
+    # Everything the mesh depends on: the file (and its version on disk) and every reconstruction parameter.
+    return ("FILES", lookup.file_frame, lookup.path, _file_version(lookup.path), tuple(sorted(arguments.items())),
+            tuple(wanted), settings.use_custom_normals)
+
+
+def _play_file(obj, settings, mesh, scene_time, pattern, lookup, key, arguments, wanted):
+    """The viewport's frame: kept in memory, being built by the worker, or built now; then the next frames are
+    queued for the worker."""
+    pointer = mesh.as_pointer()
+    frames = _memory.frame_cache(pointer)
+    result = frames.get(key)
+    ready = result is not None
+    if result is None:
+        result = _prefetcher.wait_for(frames, key, PREFETCH_WAIT_SECONDS)
+    if result is None:
         result = cache.reconstruct_file(lookup.path, arguments, wanted)
-        return _show_reconstruction(mesh, settings, os.path.basename(lookup.path) + (" (render)" if for_render else ""),
-                                    result)
+        frames.put(key, result)
+    status = _show_reconstruction(mesh, settings, os.path.basename(lookup.path), result,
+                                  "ready in memory" if ready else "")
+    frame = sequence.nearest_frame(scene_time)
+    direction = -1 if frame < _memory.last_frame.get(pointer, frame) else 1
+    _memory.last_frame[pointer] = frame
+    _prefetch(frames, settings, pattern, frame, direction, arguments, wanted)
+    return status
 
-    return key, work
+
+def _prefetch(frames, settings, pattern, frame, direction, arguments, wanted):
+    listing = _memory.sequences.frames(pattern)
+    jobs = []
+    for step in range(1, PREFETCH_AHEAD + 1):
+        try:
+            lookup = _lookup(listing, pattern, frame + direction * step, settings)
+        except SurfaceError:
+            break
+        if lookup.path is None:
+            continue
+        # Bound now: the worker reads only these plain values, never the settings.
+        jobs.append((_file_key(lookup, arguments, wanted, settings),
+                     lambda path=lookup.path: cache.reconstruct_file(path, dict(arguments), wanted)))
+    _prefetcher.want(frames, jobs)
 
 
-def _cache_source(obj, settings, mesh, scene_time):
+def _build_file(mesh, settings, path, arguments, wanted, for_render):
+    result = cache.reconstruct_file(path, arguments, wanted)
+    return _show_reconstruction(mesh, settings, os.path.basename(path) + (" (render)" if for_render else ""), result)
+
+
+def _cache_source(obj, settings, mesh, scene_time, for_render):
     pattern = resolve_cache_pattern(obj)
     lookup = _lookup(_memory.sequences.frames(pattern), pattern, scene_time, settings)
     key = ("CACHE", lookup.file_frame, lookup.path, _file_version(lookup.path), settings.use_custom_normals)
 
+    if lookup.path is None and lookup.file_frame is not None and settings.file_pattern and \
+            settings.source_type == "FILES":
+        # Outside a partial bake: the particle files are still there, so the frame is rebuilt from them.
+        return _file_source(obj, settings, mesh, scene_time, for_render)
+
     def work():
         if lookup.path is None:
             return _empty_for(mesh, lookup, scene_time, "baked frame")
-        started = time.perf_counter()
-        surface = cache.load_mesh(lookup.path)
-        loaded = time.perf_counter() - started
-        blender_seconds, attribute_note = _write(mesh, settings, surface)
-        return _status_lines(
-            f"{os.path.basename(lookup.path)} (cache)",
-            _face_counts(surface),
-            f"{loaded:.2f} s loading + {blender_seconds:.2f} s in Blender", attribute_note)
+        return _load_cached_file(mesh, settings, lookup.path)
 
-    return key, work
+    return key, work, lookup.expected_path
+
+
+def _load_cached_file(mesh, settings, path):
+    started = time.perf_counter()
+    surface = cache.load_mesh(path)
+    loaded = time.perf_counter() - started
+    blender_seconds, attribute_note = _write(mesh, settings, surface)
+    return _status_lines(f"{os.path.basename(path)} (cache)", _face_counts(surface),
+                         f"{loaded:.2f} s loading + {blender_seconds:.2f} s in Blender", attribute_note)
 
 
 def _object_source(obj, settings, mesh, depsgraph, for_render):
@@ -197,15 +303,16 @@ def _object_source(obj, settings, mesh, depsgraph, for_render):
         result = cache.reconstruct_positions(positions, attributes, arguments, wanted)
         return _show_reconstruction(mesh, settings, f"{source.name}: {kind}" + (" (render)" if for_render else ""), result)
 
-    return key, work
+    return key, work, f"object '{source.name}'"
 
 
-def _show_reconstruction(mesh, settings, label, result):
+def _show_reconstruction(mesh, settings, label, result, note=""):
     """Writes a reconstruction (from files or from an object) into the mesh; returns the status lines."""
     blender_seconds, attribute_note = _write(mesh, settings, result.mesh)
-    return _status_lines(label, f"{result.particle_count:,} particles", _face_counts(result.mesh),
-                         f"{result.seconds:.2f} s + {blender_seconds:.2f} s in Blender", _missing_note(result),
-                         attribute_note)
+    timing = f"{blender_seconds:.2f} s in Blender, {note}" if note else \
+        f"{result.seconds:.2f} s + {blender_seconds:.2f} s in Blender"
+    return _status_lines(label, f"{result.particle_count:,} particles", _face_counts(result.mesh), timing,
+                         _missing_note(result), attribute_note)
 
 
 def _lookup(frames, pattern, scene_time, settings):
@@ -250,6 +357,8 @@ def update_surface(obj, scene, force=False, depsgraph=None):
         return False
     try:
         settings = obj.meniscus
+        if settings.use_native_cache:  # the Mesh Sequence Cache modifier plays the exported file (native_cache)
+            return False
         mesh = obj.data
         if obj.mode == "EDIT" or mesh.is_editmode:
             return False
@@ -262,20 +371,23 @@ def update_surface(obj, scene, force=False, depsgraph=None):
         return False
 
     key = None
+    source = None
+    for_render = render_state.is_rendering()
     try:
-        for_render = render_state.is_rendering()
         if settings.use_cache:
-            key, work = _cache_source(obj, settings, mesh, scene_time)
+            key, work, source = _cache_source(obj, settings, mesh, scene_time, for_render)
         elif settings.source_type == "OBJECT":
             if is_subframe and pointer in _memory.shown and not force:
                 # A live simulation moves at every shutter step; one surface per frame is enough (the velocity
                 # attribute carries the motion), so subframes keep what the frame built.
                 return False
-            key, work = _object_source(obj, settings, mesh, depsgraph, for_render)
+            key, work, source = _object_source(obj, settings, mesh, depsgraph, for_render)
         else:
-            key, work = _file_source(obj, settings, mesh, scene_time, for_render)
+            key, work, source = _file_source(obj, settings, mesh, scene_time, for_render)
 
-        if not force and _memory.shown.get(pointer) == (key, len(mesh.vertices)):
+        # A frame the viewport failed to build at the same key is not done yet for a render: its policy applies.
+        unhandled_failure = for_render and _memory.failed.get(pointer) == (key, False)
+        if not force and not unhandled_failure and _memory.shown.get(pointer) == (key, len(mesh.vertices)):
             return False
         # Recorded before the work so that a failing file is not retried on every subframe of the same frame.
         _memory.shown[pointer] = (key, -1)
@@ -285,29 +397,81 @@ def update_surface(obj, scene, force=False, depsgraph=None):
             _set_status(settings, str(blank))
         _memory.shown[pointer] = (key, len(mesh.vertices))
         _memory.last_error.pop(pointer, None)
+        _memory.failed.pop(pointer, None)
         return True
     except Exception as error:
         message = str(error) or type(error).__name__
         # Unreadable files are the user's to fix and the message names file and fault: no traceback for those.
         # MemoryError carries the core's estimate of the grid it refused to allocate: a parameter to change too.
-        expected = isinstance(error, (SurfaceError, api.FormatError, OSError, MemoryError))
+        # ValueError: the core refusing the particles or a value (NaN coordinates, a grid too large).
+        expected = isinstance(error, (SurfaceError, api.FormatError, OSError, MemoryError, ValueError))
         if isinstance(error, MemoryError) and not str(error):
             message = "Out of memory: use a larger cube size"
+        message = pipeline.in_panel_terms(message, for_render)
         if _memory.last_error.get(pointer) != message:  # once per distinct problem, not on every frame
             print(f"Meniscus: '{name}' at frame {frame}: {message}")
             if not expected:
                 traceback.print_exc()
         _memory.last_error[pointer] = message
-        try:
+        status = message if expected else f"Error: {message}"
+        if for_render:
+            status = _apply_render_policy(obj, settings, mesh, scene_time, render_policy.failure_message(
+                name, frame, source, message))
+        else:
             mesh_update.clear_surface(mesh)
+        try:
             if key is None:  # failed before knowing what to show: nothing to remember, try again next time
                 _memory.shown.pop(pointer, None)
             else:
                 _memory.shown[pointer] = (key, len(mesh.vertices))
-            _set_status(settings, message if expected else f"Error: {message}", is_error=True)
+                _memory.failed[pointer] = (key, for_render)
+            _set_status(settings, status, is_error=True)
         except Exception:
             traceback.print_exc()
         return True
+
+
+def _apply_render_policy(obj, settings, mesh, scene_time, message):
+    """In a final render, what a frame that cannot be built shows (see render_policy); returns the status text.
+    STOP does not return in a render without a UI."""
+    policy = settings.render_failure
+    if policy == render_policy.HOLD:
+        held = _hold_earlier_frame(obj, settings, mesh, scene_time)
+        if held is not None:
+            print(f"{message}\nMeniscus: holding {held[0]} instead")
+            return _status_lines(f"Holding {held[0]} (this frame failed)", held[1])
+        message += f"; no earlier frame could be built to hold (tried {render_policy.HOLD_TRIES})"
+    mesh_update.clear_surface(mesh)
+    if policy == render_policy.EMPTY:
+        print(f"{message}\nMeniscus: rendering the frame without this surface")
+    else:
+        render_policy.stop_render(message)
+    return message
+
+
+def _hold_earlier_frame(obj, settings, mesh, scene_time):
+    """Builds the nearest earlier file frame that builds; returns (its file name, status) or None."""
+    if settings.source_type == "OBJECT" and not settings.use_cache:  # a live object has no earlier frames
+        return None
+    try:
+        pattern = resolve_cache_pattern(obj) if settings.use_cache else resolve_pattern(obj)
+        frames = _memory.sequences.frames(pattern)
+        failed_frame = sequence.resolve_file_frame(scene_time, settings.frame_offset, settings.frame_start,
+                                                   settings.frame_end, settings.out_of_range)
+        if not settings.use_cache:
+            arguments = reconstruction_arguments(settings, for_render=True)
+            wanted = cache.parse_attribute_names(settings.attribute_names)
+    except Exception:  # the sequence itself is unusable: nothing to hold
+        return None
+    for file_frame in render_policy.earlier_frames(frames, failed_frame):
+        path = frames[file_frame]
+        try:
+            if settings.use_cache:
+                return os.path.basename(path), _load_cached_file(mesh, settings, path)
+            return os.path.basename(path), _build_file(mesh, settings, path, arguments, wanted, True)
+        except Exception as error:
+            print(f"Meniscus: cannot hold {path} either: {error}")
+    return None
 
 
 def update_scene(scene, force=False, depsgraph=None):

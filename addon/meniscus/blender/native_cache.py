@@ -1,0 +1,164 @@
+"""Renders without the add-on: a surface's frames written as an Alembic mesh sequence through Blender's own exporter
+and played back by a Mesh Sequence Cache modifier, which every Blender reads without Meniscus (a render farm node
+where the add-on is not installed renders the same frames).
+
+Alembic rather than USD: Blender 3.4, 4.x and 5.x all export and read it with changing topology per frame; the
+exporter writes the mesh's normals (custom normals included) and its 'velocity' point attribute as the velocities
+that the modifier gives back for motion blur.
+
+The export steps the scene through the frames; at each, the frame handler builds the surface as usual (from the
+mesh cache right after a bake, so it is quick) and the exporter records it. Afterwards the surface carries the
+modifier and `settings.use_native_cache`: the add-on no longer rebuilds it, so what the viewport and the render show
+with and without the add-on is the same file.
+"""
+import os
+
+import bpy
+
+from . import mesh_update, surfaces, update
+
+MODIFIER_NAME = "Meniscus Alembic"
+
+
+class NativeCacheError(Exception):
+    pass
+
+
+def can_export():
+    """Whether this Blender has Alembic (Debian's Blender 3.4 package, for one, is built without it)."""
+    return "alembic_export" in dir(bpy.ops.wm) and "alembic_import" in dir(bpy.ops.wm)
+
+
+def alembic_path(obj):
+    """Where the Alembic file goes: beside the surface's mesh cache (or the .blend), named after the object."""
+    folder = os.path.dirname(bpy.path.abspath(update.cache_pattern_string(obj), library=obj.library))
+    return os.path.join(folder, f"{bpy.path.clean_name(obj.name)}.abc")
+
+
+def export_alembic(obj, scene, frame_start, frame_end, filepath=None):
+    """Writes the surface's scene frames frame_start..frame_end into an Alembic file and makes the surface play it;
+    returns the file's path."""
+    if not surfaces.is_surface(obj):
+        raise NativeCacheError(f"'{getattr(obj, 'name', obj)}' is not a Meniscus surface")
+    if not can_export():
+        raise NativeCacheError(f"This Blender ({bpy.app.version_string}) was built without Alembic: export from a "
+                               "build that has it (blender.org's builds do)")
+    filepath = os.path.abspath(filepath or alembic_path(obj))
+    if "//" in filepath or not os.path.isabs(filepath):
+        raise NativeCacheError("Save the .blend first, or choose Cache Files: the Alembic file goes beside the cache")
+    os.makedirs(os.path.dirname(filepath), exist_ok=True)
+    remove_native_cache(obj)
+    view_layer = bpy.context.view_layer
+    selection = [other for other in view_layer.objects if other.select_get()]
+    active = view_layer.objects.active
+    frame = scene.frame_current
+    # The exporter writes a mesh without modifiers or animation once, as constant: a modifier that changes nothing
+    # makes it sample every frame.
+    marker = obj.modifiers.new(MODIFIER_NAME + " (exporting)", "DISPLACE")
+    marker.strength = 0.0
+
+    def build_before_evaluation(changed_scene, *_args):
+        # The exporter reads the scene as evaluated for each frame, before frame_change_post would rebuild.
+        if changed_scene == scene:
+            update.update_surface(obj, scene)
+
+    bpy.app.handlers.frame_change_pre.append(build_before_evaluation)
+    try:
+        for other in selection:
+            other.select_set(False)
+        obj.select_set(True)
+        view_layer.objects.active = obj
+        result = bpy.ops.wm.alembic_export(filepath=filepath, start=frame_start, end=frame_end, selected=True,
+                                           uvs=False, normals=True, face_sets=False, export_hair=False,
+                                           export_particles=False, as_background_job=False)
+    finally:
+        bpy.app.handlers.frame_change_pre.remove(build_before_evaluation)
+        obj.modifiers.remove(marker)
+        obj.select_set(False)
+        for other in selection:
+            other.select_set(True)
+        view_layer.objects.active = active
+        scene.frame_set(frame)
+    if result != {"FINISHED"} or not os.path.exists(filepath):
+        raise NativeCacheError(f"Blender's Alembic exporter did not write {filepath}")
+    _play(obj, filepath)
+    return filepath
+
+
+def _play(obj, filepath):
+    """Adds the Mesh Sequence Cache modifier that plays filepath on obj (through an import, the one way every
+    version creates the cache file data-block and knows the path of the mesh inside it)."""
+    before = set(bpy.data.objects)
+    result = bpy.ops.wm.alembic_import(filepath=filepath, as_background_job=False)
+    imported = [other for other in bpy.data.objects if other not in before]
+    try:
+        source = next((m for other in imported for m in other.modifiers if m.type == "MESH_SEQUENCE_CACHE"), None)
+        if result != {"FINISHED"} or source is None:
+            raise NativeCacheError(f"Blender could not read back {filepath}")
+        modifier = obj.modifiers.new(MODIFIER_NAME, "MESH_SEQUENCE_CACHE")
+        # Everything the importer set (cache file, object path, which data to read: 4.5 reads velocities only
+        # where the importer asked for them).
+        for prop in source.bl_rna.properties:
+            if not prop.is_readonly and prop.identifier not in ("name", "show_expanded", "is_active"):
+                try:
+                    setattr(modifier, prop.identifier, getattr(source, prop.identifier))
+                except (AttributeError, TypeError, ValueError):
+                    pass
+    finally:
+        for other in imported:
+            mesh = other.data
+            bpy.data.objects.remove(other, do_unlink=True)
+            if mesh is not None and mesh.users == 0:
+                bpy.data.meshes.remove(mesh)
+    # The modifier replaces the geometry: the mesh under it is emptied (4.5 would otherwise keep its stale 'velocity'
+    # beside the file's, renamed 'velocity.001', and the .blend would carry a frame for nothing).
+    mesh_update.clear_surface(obj.data)
+    obj.meniscus.use_native_cache = True
+
+
+def remove_native_cache(obj):
+    for modifier in [m for m in obj.modifiers if m.name.startswith(MODIFIER_NAME)]:
+        obj.modifiers.remove(modifier)
+    obj.meniscus.use_native_cache = False
+
+
+class MENISCUS_OT_export_alembic(bpy.types.Operator):
+    """Write the surface's frames as an Alembic mesh sequence (Blender's own exporter) and play it through a Mesh
+    Sequence Cache modifier: the .blend then renders the same frames in a Blender without Meniscus (render farms)"""
+    bl_idname = "meniscus.export_alembic"
+    bl_label = "Export for Renders Without Meniscus"
+    bl_options = {"REGISTER"}
+
+    object_name: bpy.props.StringProperty(name="Object", description="Surface to export (default: the active object)")
+
+    def execute(self, context):
+        obj = bpy.data.objects.get(self.object_name) if self.object_name else context.active_object
+        scene = context.scene
+        try:
+            path = export_alembic(obj, scene, scene.frame_start, scene.frame_end)
+        except NativeCacheError as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"Wrote {path}; the surface plays it now (Remove to rebuild again)")
+        return {"FINISHED"}
+
+
+class MENISCUS_OT_remove_alembic(bpy.types.Operator):
+    """Stop playing the exported Alembic file: the surface is rebuilt by Meniscus again (the file is kept)"""
+    bl_idname = "meniscus.remove_alembic"
+    bl_label = "Remove Alembic Playback"
+    bl_options = {"REGISTER", "UNDO"}
+
+    object_name: bpy.props.StringProperty(name="Object")
+
+    def execute(self, context):
+        obj = bpy.data.objects.get(self.object_name) if self.object_name else context.active_object
+        if not surfaces.is_surface(obj):
+            return {"CANCELLED"}
+        remove_native_cache(obj)
+        update.update_surface(obj, context.scene, force=True)
+        return {"FINISHED"}
+
+
+classes = (MENISCUS_OT_export_alembic, MENISCUS_OT_remove_alembic)
+register, unregister = bpy.utils.register_classes_factory(classes)

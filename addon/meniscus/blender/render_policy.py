@@ -1,0 +1,69 @@
+"""What a final render does with a frame whose surface cannot be built (a missing or broken particle file, a render
+cube size refused for memory, a parameter out of range): the surface setting "If a Frame Fails".
+
+- STOP (default): the render stops. From the command line or a farm (`blender -b scene.blend -f 22`, `-a`) the
+  Blender process exits with status 1 after printing which surface, frame and file failed and why, so a farm marks
+  the frame failed instead of accepting an image without water. In an interactive session Blender offers Python no
+  way to cancel its render job: the error goes to the status line, the console and a message box, and the surface
+  renders empty.
+- HOLD: the nearest earlier frame of the sequence that builds is shown instead (found the same way on every farm
+  node, whatever it rendered before); when none of the few tried builds, the render stops as with STOP.
+- EMPTY: the frame renders without the surface, as the viewport shows it; the problem is printed.
+The viewport is never affected: there a failed frame shows an empty mesh and the error in the status line.
+"""
+import os
+import sys
+
+import bpy
+
+STOP, HOLD, EMPTY = "STOP", "HOLD", "EMPTY"
+ITEMS = [
+    (STOP, "Stop the Render", "Stop the render with an error (command line and farms: Blender exits with status 1), "
+                              "naming the file and the reason"),
+    (HOLD, "Hold Last Good Frame", "Render the nearest earlier frame that can be built instead"),
+    (EMPTY, "Empty Surface", "Render the frame without the surface and go on"),
+]
+# Earlier frames HOLD tries before it gives up: bounded, because a problem that is not the file's (memory, a
+# parameter) fails at every frame and each try costs a reconstruction.
+HOLD_TRIES = 3
+EXIT_STATUS = 1
+
+
+def failure_message(object_name, frame, source, reason):
+    """One line naming what failed, where, and why (the path once, even when the reason already names it)."""
+    where = reason if source and source in reason else f"{source}: {reason}" if source else reason
+    return f"Meniscus: surface '{object_name}' cannot be built for frame {frame}: {where}"
+
+
+def earlier_frames(frames, failed_frame):
+    """The file frames HOLD tries, nearest first: those listed before the failed one."""
+    candidates = sorted((frame for frame in frames if failed_frame is None or frame < failed_frame), reverse=True)
+    return candidates[:HOLD_TRIES]
+
+
+def stop_render(message):
+    """Ends a final render that must not go on. Without a UI the process exits now with EXIT_STATUS (a handler's
+    exception would only be printed and the frame written); with a UI the user is told at once."""
+    text = f"{message}\nMeniscus: render stopped (the surface setting 'If a Frame Fails' can hold the last good " \
+           f"frame or render an empty surface instead)"
+    print(text, file=sys.stderr)
+    if bpy.app.background:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        # Exiting here, not raising: Blender prints a handler's exception and renders the frame anyway.
+        os._exit(EXIT_STATUS)
+    _show_message_box(message)
+
+
+def _show_message_box(message):
+    def draw(menu, _context):
+        menu.layout.label(text=message)
+
+    def show():  # on the main thread: this may run on the render thread
+        try:
+            bpy.context.window_manager.popup_menu(draw, title="Meniscus: render frame failed", icon="ERROR")
+        except Exception:  # no window to show it in: the console and the status line have it
+            pass
+        return None
+
+    bpy.app.timers.register(show, first_interval=0.0)
