@@ -30,6 +30,15 @@ GROUP_TITLES = {
 }
 
 
+# Where the add-on shows a parameter under another label than the schema's (addon/meniscus/blender/properties.py,
+# label_of): the cube size has a render and a viewport value there.
+ADDON_LABELS = {"cube_size": "Render Cube Size (and Viewport Cube Size, add-on only)"}
+
+
+def _addon_label(parameter) -> str:
+    return ADDON_LABELS.get(parameter.name, parameter.label)
+
+
 def _import_parameters():
     build = pathlib.Path(os.environ.get("MENISCUS_BUILD", ROOT / "build"))
     sys.path.insert(0, str(build / "python"))
@@ -93,11 +102,11 @@ def render() -> str:
         lines += ["| Python keyword | CLI flag | Add-on label | Unit | Allowed | Default |",
                   "|---|---|---|---|---|---|"]
         for p in members:
-            cells = [f"`{p.name}`", _cli_spelling(p), p.label, p.unit or "-", p.allowed, _default(parameters, p)]
+            cells = [f"`{p.name}`", _cli_spelling(p), _addon_label(p), p.unit or "-", p.allowed, _default(parameters, p)]
             lines.append("| " + " | ".join(_table_cell(c) for c in cells) + " |")
         lines.append("")
         for p in members:
-            lines.append(f"- **`{p.name}`** ({p.label}): {p.help}.")
+            lines.append(f"- **`{p.name}`** ({_addon_label(p)}): {p.help}.")
             if p.automatic is not None:
                 lines.append(f"  Automatic: {parameters.format_value(p, p.automatic)}.")
             condition = _condition(parameters, p)
