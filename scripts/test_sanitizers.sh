@@ -25,6 +25,8 @@ if [ $# -gt 0 ]; then
   "$build/bin/meniscus_tests" "$@"
 else
   # One process per test case (catch_discover_tests), as many at once as there are cores: the cases are
-  # independent, and one process running them in turn leaves a core idle whenever a case runs on one thread.
-  /usr/bin/ctest --test-dir "$build" --output-on-failure -j"$(nproc)"
+  # independent, and one process running them in turn leaves a core idle whenever a case runs on one thread. The
+  # OpenMP threads of two processes on the same cores would spin at their barriers: they sleep there instead
+  # (measured on 2 busy cores: 136 s against 184 s in one process, and less CPU time).
+  OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-PASSIVE}" /usr/bin/ctest --test-dir "$build" --output-on-failure -j"$(nproc)"
 fi
