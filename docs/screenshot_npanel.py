@@ -1,11 +1,12 @@
-"""Screenshot of the Meniscus sidebar in a real Blender window (Xvfb), for the README.
+"""Screenshot of the Meniscus sidebar in a real Blender window (Xvfb), for the README: the sidebar alone, at its
+default width.
 
     xvfb-run -s '-screen 0 1200x1500x24' blender -p 0 0 1200 1500 --factory-startup --python docs/screenshot_npanel.py -- \
         --addon-path build/addon --output docs/images/npanel.png
 
 Blender 3.4 offers no way to pick the sidebar's open tab from Python, so for this picture only the Meniscus panels
-are shown under the always-present "Item" tab (with its Transform panel collapsed); in use they have their own
-"Meniscus" tab.
+are shown under the always-present "Item" tab (below its Transform panel); in use they have
+their own "Meniscus" tab.
 """
 import pathlib
 import sys
@@ -32,9 +33,10 @@ main_panel.bl_order = -100  # above the Transform panel
 for cls in [main_panel] + children:
     cls.bl_category = "Item"
     bpy.utils.register_class(cls)
-transform_panel = getattr(bpy.types, "VIEW3D_PT_transform", None)
-if transform_panel is not None:
-    transform_panel.bl_options = {"DEFAULT_CLOSED"}
+# The Item tab's Properties panel is left out of the picture (Transform is drawn by Blender itself and stays).
+properties_panel = getattr(bpy.types, "VIEW3D_PT_context_properties", None)
+if properties_panel is not None:
+    bpy.utils.unregister_class(properties_panel)
 
 
 def view3d_area():
@@ -63,6 +65,24 @@ def show_sidebar():
     return None
 
 
+def crop_to_sidebar(area):
+    """Keeps only the sidebar (at Blender's default width), so that the picture is readable at its own size."""
+    import numpy as np
+    sidebar = next(region for region in area.regions if region.type == "UI")
+    image = bpy.data.images.load(str(output))
+    width, height = image.size
+    pixels = np.empty(width * height * 4, dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    pixels = pixels.reshape(height, width, 4)  # rows from the bottom, as window coordinates
+    x0, y0 = sidebar.x, sidebar.y  # window coordinates, as the screenshot
+    part = np.ascontiguousarray(pixels[y0:y0 + sidebar.height, x0:x0 + sidebar.width])
+    cropped = bpy.data.images.new("npanel", sidebar.width, sidebar.height, alpha=True)
+    cropped.pixels.foreach_set(part.ravel())
+    cropped.filepath_raw = str(output)
+    cropped.file_format = "PNG"
+    cropped.save()
+
+
 def take_screenshot():
     window, area = view3d_area()
     override = {"window": window, "screen": window.screen, "area": area}
@@ -71,6 +91,7 @@ def take_screenshot():
             bpy.ops.screen.screenshot(filepath=str(output))
     else:
         bpy.ops.screen.screenshot(override, filepath=str(output))
+    crop_to_sidebar(area)
     print("screenshot", output)
     bpy.ops.wm.quit_blender()
     return None

@@ -6,7 +6,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/lib.sh
-require_packages clang libc++-dev libc++abi-dev libomp-dev catch2 libcli11-dev nlohmann-json3-dev zlib1g-dev
+require_packages "${MENISCUS_CLANG_PACKAGES[@]}"
 build=build-clang
 CXX=clang++ CXXFLAGS="-stdlib=libc++" LDFLAGS="-stdlib=libc++" \
   /usr/bin/cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DMENISCUS_BUILD_PYTHON=OFF \

@@ -9,7 +9,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/lib.sh
-require_packages g++-mingw-w64-x86-64-posix libz-mingw-w64-dev wine64 catch2 libcli11-dev nlohmann-json3-dev
+require_packages "${MENISCUS_WINDOWS_PACKAGES[@]}"
 wine=/usr/lib/wine/wine64  # Debian's wine64 package does not put its loader on PATH
 build=build-windows
 

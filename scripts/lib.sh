@@ -50,6 +50,13 @@ bpy_venv() {
   echo "build/venv/bpy-$version/bin/python"
 }
 
-# Build tools every build needs (Debian 12).
+# Build tools every build needs (Debian 12), and those of the two portability builds.
 MENISCUS_BUILD_PACKAGES=(build-essential cmake ccache pybind11-dev catch2 libcli11-dev nlohmann-json3-dev zlib1g-dev
                          python3-dev python3-numpy python3-pytest python3-venv)
+MENISCUS_CLANG_PACKAGES=(clang libc++-dev libc++abi-dev libomp-dev catch2 libcli11-dev nlohmann-json3-dev zlib1g-dev)
+MENISCUS_WINDOWS_PACKAGES=(g++-mingw-w64-x86-64-posix libz-mingw-w64-dev wine64 catch2 libcli11-dev nlohmann-json3-dev)
+
+# ccache hashes the paths under the repository relative to the build folder, so that builds of the same sources in
+# other folders of the same depth share objects: the wheels' build folders (scripts/package.sh) reuse the development
+# build's core, and other clones of the repository reuse each other's.
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$(pwd -P)}"

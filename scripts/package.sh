@@ -22,8 +22,11 @@ for python_version in 3.10 3.11 3.13; do
   python="$(python_for "$python_version")"
   echo "== wheel for CPython $python_version"
   # pip builds in an isolated environment with scikit-build-core and pybind11 from PyPI (pybind11 >= 2.13 knows
-  # 3.13); ccache makes the core's objects, identical for every Python, compile once.
-  "$python" -m pip wheel . --no-deps --disable-pip-version-check -q -w "$raw" 2>&1 | { grep -v "^WARNING: Location" || true; }
+  # 3.13). Each wheel builds in build-wheel-<tag>/, beside build/ at the same depth: with CCACHE_BASEDIR (lib.sh) the
+  # core's objects, identical for every Python, come from the development build's cache, and a second run is
+  # incremental.
+  "$python" -m pip wheel . --no-deps --disable-pip-version-check -q -w "$raw" \
+    --config-settings=build-dir="build-wheel-{wheel_tag}" 2>&1 | { grep -v "^WARNING: Location" || true; }
   [ "${PIPESTATUS[0]}" -eq 0 ]
 done
 for wheel in "$raw"/meniscus-"$version"-*.whl; do
