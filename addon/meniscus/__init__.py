@@ -21,6 +21,13 @@ bl_info = {
 import os  # noqa: E402
 import sys  # noqa: E402
 
+# Threads waiting at OpenMP barriers spin briefly, then sleep: the values the library's own __init__ sets (see
+# native/core/base/waiting.h for why). GNU libgomp reads them when the core loads, which here happens below (from its
+# copy), before the library's __init__ runs. A policy the user set stays as it is.
+if "OMP_WAIT_POLICY" not in os.environ:
+    os.environ.setdefault("GOMP_SPINCOUNT", "10000")
+    os.environ.setdefault("KMP_BLOCKTIME", "1")
+
 from . import core_copy  # noqa: E402
 
 
@@ -52,14 +59,14 @@ def _fresh_library(library):
 if os.path.exists(os.path.join(os.path.dirname(__file__), "api.py")):  # legacy zip: the library is bundled here
     _fresh_library(__name__)
     from . import api, cache, parameters, sequence  # noqa: F401
-    from . import playback  # noqa: F401
+    from . import farm, playback  # noqa: F401
     # Scripts in every Blender can then write `import meniscus; meniscus.reconstruct(...)`: here `meniscus` is this
     # add-on, in 4.2+ the library itself.
     from .api import *  # noqa: F401,F403
 else:  # extension: the wheel Blender installed
     _fresh_library("meniscus")
     from meniscus import api, cache, parameters, sequence  # noqa: F401
-    from meniscus import playback  # noqa: F401
+    from meniscus import farm, playback  # noqa: F401
 
 
 def register():
