@@ -13,6 +13,7 @@
 #include <cctype>
 #include <atomic>
 #include <chrono>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -578,6 +579,11 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
     }
     report["parameters"]["threads_used"] = threads;
     report["parameters"]["frames_in_parallel"] = workers;
+    // How waiting threads behaved (native/core/base/waiting.h): the runtime read these when the process started.
+    for (const char* variable : {"OMP_WAIT_POLICY", "GOMP_SPINCOUNT", "KMP_BLOCKTIME"}) {
+        const char* value = std::getenv(variable);
+        report["openmp_wait"][variable] = value ? json(value) : json(nullptr);
+    }
     report["frames"] = json::array();
     for (json& record : records)
         if (!record.is_null()) report["frames"].push_back(std::move(record));

@@ -1,0 +1,50 @@
+"""Busy machines: the CLI and the Python package make waiting OpenMP threads spin briefly, then sleep, unless the user
+chose a policy (native/core/base/waiting.h says why). What the runtime read is what the process started with, so the
+checks read it back from the CLI's --stats and from a fresh Python process."""
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from conftest import BUILD
+
+POLICY_VARIABLES = ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT", "KMP_BLOCKTIME")
+
+
+def environment_without_policy(**extra):
+    env = {k: v for k, v in os.environ.items() if k not in POLICY_VARIABLES}
+    env.update(extra)
+    return env
+
+
+def cli_wait_settings(cli, tmp_path, shared, env):
+    stats = tmp_path / "stats.json"
+    subprocess.run([cli, "reconstruct", str(shared / "splashsurf" / "double_dam_break_frame_26_4732_particles.vtk"),
+                    "-o", str(tmp_path / "surface.ply"), "-r", "0.025", "-c", "1.0", "-n", "2",
+                    "--stats", str(stats)], check=True, env=env, capture_output=True)
+    return json.loads(stats.read_text())["openmp_wait"]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the restart with GOMP_SPINCOUNT is Linux's")
+def test_cli_waits_briefly_when_the_user_chose_nothing(cli, tmp_path, shared):
+    settings = cli_wait_settings(cli, tmp_path, shared, environment_without_policy())
+    assert settings["GOMP_SPINCOUNT"] == "10000"
+    assert settings["OMP_WAIT_POLICY"] is None
+
+
+def test_cli_keeps_the_users_policy(cli, tmp_path, shared):
+    settings = cli_wait_settings(cli, tmp_path, shared, environment_without_policy(OMP_WAIT_POLICY="ACTIVE"))
+    assert settings["OMP_WAIT_POLICY"] == "ACTIVE"
+    assert settings["GOMP_SPINCOUNT"] is None
+
+
+@pytest.mark.parametrize("user_setting, expected", [({}, "10000"), ({"GOMP_SPINCOUNT": "500"}, "500"),
+                                                    ({"OMP_WAIT_POLICY": "PASSIVE"}, None)])
+def test_python_package_sets_the_spin_before_the_core_loads(user_setting, expected):
+    code = ("import os, sys; import meniscus; "
+            "print(os.environ.get('GOMP_SPINCOUNT'), 'meniscus._core' in sys.modules)")
+    env = environment_without_policy(PYTHONPATH=str(BUILD / "python"), **user_setting)
+    out = subprocess.run([sys.executable, "-c", code], check=True, env=env, capture_output=True, text=True).stdout.split()
+    assert out == [str(expected), "True"]
