@@ -1,12 +1,14 @@
 #include "post/decimation.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <cstring>
 #include <utility>
 #include <vector>
 
 #include "base/compaction.h"
+#include "base/greedy_selection.h"
 #include "base/parallel.h"
 #include "post/collapse.h"
 
@@ -242,24 +244,16 @@ void closed_two_ring(const MeshAdjacency& adj, const Candidate& cand, std::vecto
 }
 
 
-// Greedy selection in index order (sequential, O(candidates x two-ring size)): a candidate is taken when no vertex
-// of its closed two-ring was claimed earlier in this pass. claim[v] is the stamp of the candidate that took v;
-// stamps grow across passes, so claims of earlier passes (below the pass's first stamp) do not count.
+// The candidates a greedy pass in candidate order takes (one is taken when no vertex of its closed two-ring was
+// claimed by one taken before it), selected in parallel with the same result; their two-rings get claim[v] = pass.
 std::vector<Candidate> select_disjoint(const MeshAdjacency& adj, const std::vector<Candidate>& candidates, std::vector<int32_t>& claim,
-                                       int32_t& claim_stamp) {
+                                       int32_t pass, std::vector<std::atomic<int32_t>>& lowest, int threads) {
+    std::vector<std::vector<int32_t>> regions(candidates.size());
+    parallel_for(static_cast<int64_t>(candidates.size()), threads, [&](int64_t i) { closed_two_ring(adj, candidates[i], regions[i]); }, 16);
+    const std::vector<uint8_t> taken = select_greedy_disjoint(regions, claim, pass, lowest, threads);
     std::vector<Candidate> selected;
-    std::vector<int32_t> region;
-    const int32_t pass_first_stamp = claim_stamp;
-    for (const Candidate& cand : candidates) {
-        closed_two_ring(adj, cand, region);
-        bool free = true;
-        for (int32_t v : region)
-            if (claim[v] >= pass_first_stamp) { free = false; break; }
-        if (!free) continue;
-        for (int32_t v : region) claim[v] = claim_stamp;
-        ++claim_stamp;
-        selected.push_back(cand);
-    }
+    for (std::size_t i = 0; i < candidates.size(); ++i)
+        if (taken[i]) selected.push_back(candidates[i]);
     return selected;
 }
 
@@ -314,10 +308,10 @@ PassOutcome collapse_selected(const MeshAdjacency& adj, const std::vector<Candid
     return outcome;
 }
 
-std::vector<uint8_t> claimed_since(const std::vector<int32_t>& claim, int32_t first_stamp, int threads) {
+std::vector<uint8_t> claimed_in(const std::vector<int32_t>& claim, int32_t pass, int threads) {
     std::vector<uint8_t> claimed(claim.size());
     parallel_blocks(static_cast<int64_t>(claim.size()), threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t v = begin; v < end; ++v) claimed[v] = claim[v] >= first_stamp;
+        for (int64_t v = begin; v < end; ++v) claimed[v] = claim[v] == pass;
     });
     return claimed;
 }
@@ -361,8 +355,8 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
     std::vector<int32_t> triangles = std::move(mesh.triangles);
     std::vector<float> positions = std::move(mesh.vertices);
     std::vector<uint8_t> removed(nv, 0);
-    std::vector<int32_t> claim(nv, -1);
-    int32_t claim_stamp = 0;
+    std::vector<int32_t> claim(nv, -1);  // the pass whose selection claimed the vertex
+    std::vector<std::atomic<int32_t>> lowest;  // select_disjoint's scratch, made when there are candidates
     std::size_t removed_configurations = 0;
     bool changed = false;
 
@@ -371,8 +365,8 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
     for (int pass = 0; pass < kMaxDetectionPasses; ++pass) {
         const std::vector<Candidate> candidates = find_candidates(adj, threads, pinned);
         if (candidates.empty()) break;
-        const int32_t pass_first_stamp = claim_stamp;
-        const std::vector<Candidate> selected = select_disjoint(adj, candidates, claim, claim_stamp);
+        if (lowest.empty()) lowest = std::vector<std::atomic<int32_t>>(nv);
+        const std::vector<Candidate> selected = select_disjoint(adj, candidates, claim, pass, lowest, threads);
         CollapseMesh work(triangles, positions, adj.vertex_triangles, removed, threads);
         const PassOutcome outcome = collapse_selected(adj, selected, work, threads);
         removed_configurations += outcome.removed_configurations;
@@ -380,7 +374,7 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
         changed = changed || outcome.changed;
         if (!outcome.changed) break;
         adjacency_is_current = pass + 1 < kMaxDetectionPasses;  // the last pass's collapses are not patched in
-        if (adjacency_is_current) patch_adjacency(adj, work, triangles, claimed_since(claim, pass_first_stamp, threads), threads);
+        if (adjacency_is_current) patch_adjacency(adj, work, triangles, claimed_in(claim, pass, threads), threads);
     }
     if (changed) {
         claim = std::vector<int32_t>();
