@@ -23,35 +23,64 @@ constexpr int64_t kBlock = 4096;
 // fixed point on marching-cubes output; the cap bounds the work on pathological input.
 constexpr int kMaxDetectionPasses = 10;
 
-// Turns the adjacency of the working mesh into the one of the compacted mesh (same triangles, in the same order),
-// in place: rows of removed vertices (which have no triangles left) dropped and neighbour indices renumbered. The
-// renumbering (a random read per item) runs in parallel where the items lie; then the kept rows move down in vertex
-// order, a serial but sequential copy: new row starts never lie after old ones, so it overwrites nothing still
-// needed, and the renumbering keeps the order, so rows stay sorted. No rebuild, and no second copy of the lists.
-void renumber_adjacency(MeshAdjacency& adjacency, const std::vector<int32_t>& new_index, int threads) {
-    auto renumber_rows = [&](CsrList& list, bool renumber_items) {
-        const int64_t nv = static_cast<int64_t>(list.rows());
-        if (renumber_items)
-            parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-                for (int64_t v = begin; v < end; ++v)
-                    if (new_index[v] >= 0)
-                        for (int64_t k = list.offsets[v]; k < list.offsets[v + 1]; ++k) list.items[k] = new_index[list.items[k]];
-            });
-        int64_t write = 0, row = 0;
-        for (int64_t v = 0; v < nv; ++v) {
-            const int64_t begin = list.offsets[v], end = list.offsets[v + 1];  // offsets[v] is not yet overwritten
+constexpr int64_t kRowBlock = int64_t{1} << 14;
+
+// Drops the rows of `list` whose new_index is negative and moves the kept rows down, in place and in parallel over
+// fixed blocks of rows. A block's kept items go right after the earlier blocks' (destinations only lie at or below
+// sources), so a block may overwrite the end of an earlier block's source: each block first saves that end (the part
+// below its own and later blocks' destinations is never written by them), then all move at once, reading the saved
+// end where it lies. Within a block the copy runs forwards, writes never ahead of reads.
+void drop_rows(CsrList& list, const std::vector<int32_t>& new_index, int threads) {
+    const int64_t nv = static_cast<int64_t>(list.rows());
+    const int64_t blocks = (nv + kRowBlock - 1) / kRowBlock;
+    auto block_rows = [&](int64_t b) { return std::make_pair(b * kRowBlock, std::min(nv, (b + 1) * kRowBlock)); };
+    // dst[b]: where block b's kept items go; rows_before[b]: kept rows before block b.
+    std::vector<int64_t> dst(static_cast<std::size_t>(blocks) + 1, 0), rows_before(static_cast<std::size_t>(blocks) + 1, 0);
+    parallel_for(blocks, threads, [&](int64_t b) {
+        int64_t items = 0, rows = 0;
+        for (int64_t v = block_rows(b).first; v < block_rows(b).second; ++v)
+            if (new_index[v] >= 0) items += list.offsets[v + 1] - list.offsets[v], ++rows;
+        dst[b + 1] = items, rows_before[b + 1] = rows;
+    });
+    for (int64_t b = 0; b < blocks; ++b) dst[b + 1] += dst[b], rows_before[b + 1] += rows_before[b];
+    // The saved ends: block b's source items at or above the next block's destination.
+    std::vector<int64_t> saved_from(static_cast<std::size_t>(blocks)), saved_at(static_cast<std::size_t>(blocks) + 1, 0);
+    for (int64_t b = 0; b < blocks; ++b) {
+        const int64_t src_begin = list.offsets[block_rows(b).first], src_end = list.offsets[block_rows(b).second];
+        saved_from[b] = std::min(src_end, std::max(src_begin, dst[b + 1]));
+        saved_at[b + 1] = saved_at[b] + (src_end - saved_from[b]);
+    }
+    std::vector<int32_t> saved(static_cast<std::size_t>(saved_at[blocks]));
+    parallel_for(blocks, threads, [&](int64_t b) {
+        std::copy(list.items.begin() + saved_from[b], list.items.begin() + list.offsets[block_rows(b).second], saved.begin() + saved_at[b]);
+    });
+    std::vector<int64_t> offsets(static_cast<std::size_t>(rows_before[blocks]) + 1);
+    parallel_for(blocks, threads, [&](int64_t b) {
+        int64_t write = dst[b], row = rows_before[b];
+        const int64_t end_from_list = saved_from[b], saved_shift = saved_at[b] - saved_from[b];  // source position -> saved
+        for (int64_t v = block_rows(b).first; v < block_rows(b).second; ++v) {
             if (new_index[v] < 0) continue;
-            list.offsets[row] = write;
-            if (write != begin) std::memmove(list.items.data() + write, list.items.data() + begin, static_cast<std::size_t>(end - begin) * sizeof(int32_t));
-            write += end - begin;
-            ++row;
+            offsets[row++] = write;
+            for (int64_t k = list.offsets[v]; k < list.offsets[v + 1]; ++k) list.items[write++] = k < end_from_list ? list.items[k] : saved[k + saved_shift];
         }
-        list.offsets[row] = write;
-        list.offsets.resize(static_cast<std::size_t>(row) + 1);
-        list.items.resize(static_cast<std::size_t>(write));
-    };
-    renumber_rows(adjacency.vertex_triangles, false);
-    renumber_rows(adjacency.vertex_neighbours, true);
+    });
+    offsets.back() = dst[blocks];
+    list.offsets.swap(offsets);
+    list.items.resize(static_cast<std::size_t>(dst[blocks]));
+}
+
+// Turns the adjacency of the working mesh into the one of the compacted mesh (same triangles, in the same order),
+// in place: rows of removed vertices dropped and neighbour indices renumbered, both in parallel. The renumbering
+// keeps the order, so rows stay sorted. No rebuild, and no second copy of the lists.
+void renumber_adjacency(MeshAdjacency& adjacency, const std::vector<int32_t>& new_index, int threads) {
+    CsrList& neighbours = adjacency.vertex_neighbours;
+    parallel_blocks(static_cast<int64_t>(neighbours.rows()), threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t v = begin; v < end; ++v)
+            if (new_index[v] >= 0)
+                for (int64_t k = neighbours.offsets[v]; k < neighbours.offsets[v + 1]; ++k) neighbours.items[k] = new_index[neighbours.items[k]];
+    });
+    drop_rows(adjacency.vertex_triangles, new_index, threads);
+    drop_rows(neighbours, new_index, threads);
 }
 
 // Replaces the rows of the claimed vertices (ascending in `touched`) by `fresh` and renumbers the other rows' items
