@@ -61,7 +61,11 @@ void drop_rows(CsrList& list, const std::vector<int32_t>& new_index, int threads
         for (int64_t v = block_rows(b).first; v < block_rows(b).second; ++v) {
             if (new_index[v] < 0) continue;
             offsets[row++] = write;
-            for (int64_t k = list.offsets[v]; k < list.offsets[v + 1]; ++k) list.items[write++] = k < end_from_list ? list.items[k] : saved[k + saved_shift];
+            const int64_t begin = list.offsets[v], end = list.offsets[v + 1], split = std::max(begin, std::min(end, end_from_list));
+            if (split > begin && write != begin)
+                std::memmove(list.items.data() + write, list.items.data() + begin, static_cast<std::size_t>(split - begin) * sizeof(int32_t));
+            write += split - begin;
+            for (int64_t k = split; k < end; ++k) list.items[write++] = saved[k + saved_shift];
         }
     });
     offsets.back() = dst[blocks];
