@@ -77,6 +77,40 @@ TEST_CASE("vertex -> triangle lists are the serial counting sort's at every thre
     }
 }
 
+TEST_CASE("adjacency rows over several scan blocks hold each vertex's own triangles and neighbours", "[threads][adjacency]") {
+    // An icosphere of 163 842 vertices (several blocks of the row-start scan) with every seventh triangle taken out,
+    // so the neighbour lists take the general path (open fans) and its scan too; rows checked against direct counts.
+    TriMesh mesh = make_icosphere(7);
+    REQUIRE(mesh.num_vertices() > 2 * 65536);
+    std::vector<int32_t> kept;
+    for (std::size_t t = 0; t < mesh.num_triangles(); ++t)
+        if (t % 7 != 3) kept.insert(kept.end(), mesh.triangles.begin() + 3 * t, mesh.triangles.begin() + 3 * t + 3);
+    mesh.triangles = kept;
+    std::vector<int64_t> triangles_of(mesh.num_vertices(), 0);
+    for (int32_t v : mesh.triangles) ++triangles_of[v];
+    std::vector<std::pair<int32_t, int32_t>> edges;  // (vertex, neighbour), both directions
+    for (std::size_t t = 0; t < mesh.num_triangles(); ++t)
+        for (int k = 0; k < 3; ++k) {
+            const int32_t a = mesh.triangles[3 * t + k], b = mesh.triangles[3 * t + (k + 1) % 3];
+            edges.push_back({a, b}), edges.push_back({b, a});
+        }
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    std::vector<int32_t> expected_neighbours;
+    std::vector<int64_t> neighbours_of(mesh.num_vertices(), 0);
+    for (const auto& e : edges) expected_neighbours.push_back(e.second), ++neighbours_of[e.first];
+    for (int threads : kThreadCounts) {
+        INFO(threads << " threads");
+        const MeshAdjacency adjacency = build_adjacency(mesh, threads);
+        bool rows_match = true;
+        for (std::size_t v = 0; v < mesh.num_vertices(); ++v)
+            rows_match = rows_match && adjacency.vertex_triangles.size(v) == triangles_of[v] && adjacency.vertex_neighbours.size(v) == neighbours_of[v];
+        CHECK(rows_match);
+        CHECK(adjacency.vertex_neighbours.items == expected_neighbours);
+        CHECK(adjacency.vertex_neighbours.offsets.back() > adjacency.vertex_triangles.offsets.back());  // the general path ran
+    }
+}
+
 TEST_CASE("component labels are numbered by smallest vertex at every thread count", "[threads][components]") {
     const TriMesh mesh = droplet_mesh();
     // The reference: a breadth-first search from each vertex not yet labelled, in vertex order.
