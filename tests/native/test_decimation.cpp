@@ -151,17 +151,29 @@ TEST_CASE("decimation refuses out-of-range indices", "[decimation]") {
 TEST_CASE("decimation of real marching-cubes meshes hands over the adjacency a rebuild gives", "[decimation][reconstruction]") {
     // Droplets (single particles and pairs) at c = 1.0: their blobs carry several barnacles each, close together,
     // so later decimation passes run on patched adjacencies.
-    const std::vector<float> positions = droplet_particles(7, 10);
-    SurfaceReconstruction r = reconstruct_surface(PositionsView(positions.data(), positions.size() / 3), reconstruction_params(0.025, 1.0), {});
-    MeshAdjacency handed;
-    REQUIRE(decimate_barnacles(r.mesh, 2, &handed) > 5);
-    const MeshAdjacency rebuilt = build_adjacency(r.mesh, 1);
-    REQUIRE(handed.vertex_triangles.rows() == r.mesh.num_vertices());
-    CHECK(handed.vertex_triangles.offsets == rebuilt.vertex_triangles.offsets);
-    CHECK(handed.vertex_triangles.items == rebuilt.vertex_triangles.items);
-    CHECK(handed.vertex_neighbours.offsets == rebuilt.vertex_neighbours.offsets);
-    CHECK(handed.vertex_neighbours.items == rebuilt.vertex_neighbours.items);
-    CHECK(count_single_vertex_configurations(r.mesh) == 0);
-    CHECK(count_double_vertex_configurations(r.mesh) == 0);
-    CHECK(check_mesh(r.mesh).ok());
+    // Large enough for several blocks of rows in the parallel dropping of removed vertices' rows; at several thread
+    // counts, each the same mesh.
+    const std::vector<float> positions = droplet_particles(11, 30);
+    const TriMesh reconstructed =
+        reconstruct_surface(PositionsView(positions.data(), positions.size() / 3), reconstruction_params(0.025, 1.0), {}).mesh;
+    REQUIRE(reconstructed.num_vertices() > 3 * 16384);
+    TriMesh first;
+    for (int threads : {2, 3, 7}) {
+        INFO(threads << " threads");
+        TriMesh mesh = reconstructed;
+        MeshAdjacency handed;
+        REQUIRE(decimate_barnacles(mesh, threads, &handed) > 5);
+        const MeshAdjacency rebuilt = build_adjacency(mesh, 1);
+        REQUIRE(handed.vertex_triangles.rows() == mesh.num_vertices());
+        CHECK(handed.vertex_triangles.offsets == rebuilt.vertex_triangles.offsets);
+        CHECK(handed.vertex_triangles.items == rebuilt.vertex_triangles.items);
+        CHECK(handed.vertex_neighbours.offsets == rebuilt.vertex_neighbours.offsets);
+        CHECK(handed.vertex_neighbours.items == rebuilt.vertex_neighbours.items);
+        CHECK(count_single_vertex_configurations(mesh) == 0);
+        CHECK(count_double_vertex_configurations(mesh) == 0);
+        CHECK(check_mesh(mesh).ok());
+        if (first.triangles.empty()) first = mesh;
+        CHECK(mesh.triangles == first.triangles);
+        CHECK(mesh.vertices == first.vertices);
+    }
 }

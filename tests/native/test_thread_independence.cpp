@@ -1,13 +1,19 @@
 // The parallel building blocks and the default pipeline give the same bits at every thread count, and the parallel
 // versions of once-serial steps give what the serial ones gave (base/compaction.h, base/concurrent_disjoint_sets.h,
-// the vertex -> triangle lists, component labels, surface aggregates).
+// the vertex -> triangle lists, component labels, surface aggregates, the greedy selection of disjoint sets, the
+// particle grid).
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
 #include "base/compaction.h"
 #include "base/concurrent_disjoint_sets.h"
+#include "base/greedy_selection.h"
 #include "io/io.h"
 #include "mesh/adjacency.h"
 #include "mesh/components.h"
@@ -15,6 +21,7 @@
 #include "test_files.h"
 #include "pipeline.h"
 #include "post/surface_aggregates.h"
+#include "sph/neighborhood.h"
 #include "surface/reconstruction.h"
 
 using namespace meniscus;
@@ -67,6 +74,40 @@ TEST_CASE("vertex -> triangle lists are the serial counting sort's at every thre
         const CsrList parallel = build_vertex_triangles(mesh, threads);
         CHECK(parallel.offsets == serial.offsets);
         CHECK(parallel.items == serial.items);
+    }
+}
+
+TEST_CASE("adjacency rows over several scan blocks hold each vertex's own triangles and neighbours", "[threads][adjacency]") {
+    // An icosphere of 163 842 vertices (several blocks of the row-start scan) with every seventh triangle taken out,
+    // so the neighbour lists take the general path (open fans) and its scan too; rows checked against direct counts.
+    TriMesh mesh = make_icosphere(7);
+    REQUIRE(mesh.num_vertices() > 2 * 65536);
+    std::vector<int32_t> kept;
+    for (std::size_t t = 0; t < mesh.num_triangles(); ++t)
+        if (t % 7 != 3) kept.insert(kept.end(), mesh.triangles.begin() + 3 * t, mesh.triangles.begin() + 3 * t + 3);
+    mesh.triangles = kept;
+    std::vector<int64_t> triangles_of(mesh.num_vertices(), 0);
+    for (int32_t v : mesh.triangles) ++triangles_of[v];
+    std::vector<std::pair<int32_t, int32_t>> edges;  // (vertex, neighbour), both directions
+    for (std::size_t t = 0; t < mesh.num_triangles(); ++t)
+        for (int k = 0; k < 3; ++k) {
+            const int32_t a = mesh.triangles[3 * t + k], b = mesh.triangles[3 * t + (k + 1) % 3];
+            edges.push_back({a, b}), edges.push_back({b, a});
+        }
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    std::vector<int32_t> expected_neighbours;
+    std::vector<int64_t> neighbours_of(mesh.num_vertices(), 0);
+    for (const auto& e : edges) expected_neighbours.push_back(e.second), ++neighbours_of[e.first];
+    for (int threads : kThreadCounts) {
+        INFO(threads << " threads");
+        const MeshAdjacency adjacency = build_adjacency(mesh, threads);
+        bool rows_match = true;
+        for (std::size_t v = 0; v < mesh.num_vertices(); ++v)
+            rows_match = rows_match && adjacency.vertex_triangles.size(v) == triangles_of[v] && adjacency.vertex_neighbours.size(v) == neighbours_of[v];
+        CHECK(rows_match);
+        CHECK(adjacency.vertex_neighbours.items == expected_neighbours);
+        CHECK(adjacency.vertex_neighbours.offsets.back() > adjacency.vertex_triangles.offsets.back());  // the general path ran
     }
 }
 
@@ -165,4 +206,86 @@ TEST_CASE("volumes of very many components are summed in parallel with the same 
     const std::vector<double> one = component_volumes(mesh, labels, count, 1);
     for (double volume : one) REQUIRE(volume == Approx(1.0 / 6.0));
     for (int threads : {2, 3, 7}) CHECK(component_volumes(mesh, labels, count, threads) == one);
+}
+
+TEST_CASE("the parallel greedy selection takes the sets a serial greedy pass takes, at every thread count", "[threads][decimation]") {
+    // 6 000 sets of 12 vertices from a sliding window over 20 000 vertices: long chains of conflicts.
+    const int32_t vertex_count = 20000;
+    std::vector<std::vector<int32_t>> regions(6000);
+    uint32_t state = 12345;
+    auto next = [&] { return state = state * 1664525u + 1013904223u, state >> 8; };
+    for (std::size_t i = 0; i < regions.size(); ++i) {
+        const int32_t window = static_cast<int32_t>(next() % (vertex_count - 60));
+        for (int k = 0; k < 12; ++k) regions[i].push_back(window + static_cast<int32_t>(next() % 60));
+    }
+    std::vector<int32_t> before(vertex_count, -1);
+    before[100] = 2;  // a mark of an earlier pass does not count
+    std::vector<int32_t> serial_claim = before;
+    std::vector<uint8_t> serial_taken(regions.size(), 0);
+    for (std::size_t i = 0; i < regions.size(); ++i) {
+        bool free = true;
+        for (int32_t v : regions[i]) free = free && serial_claim[v] != 3;
+        if (!free) continue;
+        serial_taken[i] = 1;
+        for (int32_t v : regions[i]) serial_claim[v] = 3;
+    }
+    const std::size_t taken_count = static_cast<std::size_t>(std::count(serial_taken.begin(), serial_taken.end(), 1));
+    REQUIRE(taken_count > 50);
+    REQUIRE(taken_count < regions.size() / 2);
+    for (int threads : kThreadCounts) {
+        std::vector<int32_t> claim = before;
+        std::vector<std::atomic<int32_t>> lowest(vertex_count);
+        INFO(threads << " threads");
+        CHECK(select_greedy_disjoint(regions, claim, 3, lowest, threads) == serial_taken);
+        CHECK(claim == serial_claim);
+    }
+}
+
+TEST_CASE("the particle grid is the same at every thread count, sorted by cell and then input order", "[threads][sph]") {
+    // 300 000 particles (several blocks of the parallel radix sort) in a box of 40^3 cells, every fifth left out.
+    const std::size_t n = 300000;
+    const double cell = 0.1;
+    std::vector<float> positions(3 * n);
+    uint32_t state = 777;
+    for (float& x : positions) state = state * 1664525u + 1013904223u, x = static_cast<float>((state >> 8) % 4000000) * 1.0e-6f - 1.7f;
+    std::vector<uint8_t> keep(n);
+    for (std::size_t i = 0; i < n; ++i) keep[i] = i % 5 != 2;
+    auto cell_of = [&](uint32_t i) {
+        std::array<int64_t, 3> c;
+        for (int k = 0; k < 3; ++k) c[k] = static_cast<int64_t>(std::floor(double(positions[3 * i + k]) / cell));
+        return std::array<int64_t, 3>{c[2], c[1], c[0]};
+    };
+    std::vector<uint32_t> expected;
+    for (uint32_t i = 0; i < n; ++i)
+        if (keep[i]) expected.push_back(i);
+    std::stable_sort(expected.begin(), expected.end(), [&](uint32_t a, uint32_t b) { return cell_of(a) < cell_of(b); });
+    const PositionsView view(positions.data(), n);
+    const ParticleGrid one(view, cell, 1, &keep);
+    REQUIRE(one.original_indices() == expected);
+    REQUIRE(one.num_cells() > 50000);
+    for (std::size_t c = 0; c < one.num_cells(); ++c) {
+        const auto coords = one.cell_coords(c);
+        REQUIRE(one.cell_begin(c) < one.cell_end(c));
+        for (std::size_t j = one.cell_begin(c); j < one.cell_end(c); ++j) {
+            const auto zyx = cell_of(one.original_index(j));
+            REQUIRE(coords == std::array<int64_t, 3>{zyx[2], zyx[1], zyx[0]});
+        }
+    }
+    for (int threads : kThreadCounts) {
+        const ParticleGrid grid(view, cell, threads, &keep);
+        INFO(threads << " threads");
+        CHECK(grid.original_indices() == one.original_indices());
+        CHECK(grid.positions() == one.positions());
+        REQUIRE(grid.num_cells() == one.num_cells());
+        bool same_cells = true;
+        for (std::size_t c = 0; c < one.num_cells(); ++c)
+            same_cells = same_cells && grid.cell_coords(c) == one.cell_coords(c) && grid.cell_begin(c) == one.cell_begin(c) &&
+                         grid.cell_end(c) == one.cell_end(c);
+        CHECK(same_cells);
+    }
+    // Coordinates too large for the grid: the first such particle is named, whichever thread meets it.
+    positions[3 * 250001 + 1] = 1.0e30f;
+    positions[3 * 70001] = -1.0e30f;
+    for (int threads : {1, 4})
+        CHECK_THROWS_WITH(ParticleGrid(view, cell, threads, &keep), Catch::Contains("particle 70001 has a coordinate too large"));
 }

@@ -42,15 +42,15 @@ int64_t number_kept(int64_t n, int threads, Keep&& keep, int32_t* new_index) {
     return first.back();
 }
 
-// The kept items of [0, n), ascending.
-template <class Keep>
-std::vector<int32_t> kept_indices(int64_t n, int threads, Keep&& keep) {
+// The kept items of [0, n), ascending, as Index (uint32_t where n may pass INT32_MAX).
+template <class Index = int32_t, class Keep>
+std::vector<Index> kept_indices(int64_t n, int threads, Keep&& keep) {
     const std::vector<int64_t> first = compaction_detail::kept_before_blocks(n, threads, keep);
-    std::vector<int32_t> out(static_cast<std::size_t>(first.back()));
+    std::vector<Index> out(static_cast<std::size_t>(first.back()));
     parallel_for(static_cast<int64_t>(first.size()) - 1, threads, [&](int64_t b) {
         int64_t next = first[static_cast<std::size_t>(b)];
         for (int64_t i = b * kCompactionBlock, end = std::min(n, i + kCompactionBlock); i < end; ++i)
-            if (keep(i)) out[static_cast<std::size_t>(next++)] = static_cast<int32_t>(i);
+            if (keep(i)) out[static_cast<std::size_t>(next++)] = static_cast<Index>(i);
     });
     return out;
 }

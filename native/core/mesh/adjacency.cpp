@@ -14,9 +14,24 @@ namespace {
 
 constexpr int64_t kBlock = 4096;
 
-void exclusive_scan_in_place(std::vector<int64_t>& offsets) {
-    // offsets[0] == 0 and offsets[r + 1] holds the count of row r.
-    for (std::size_t r = 1; r < offsets.size(); ++r) offsets[r] += offsets[r - 1];
+constexpr int64_t kScanBlock = int64_t{1} << 16;
+
+// offsets[0] == 0 and offsets[r + 1] holds the count of row r: turned into row starts. Fixed blocks: their totals in
+// parallel, the totals scanned, then each block's running sum from its start (integer sums: exact in any order).
+void exclusive_scan_in_place(std::vector<int64_t>& offsets, int threads) {
+    const int64_t rows = static_cast<int64_t>(offsets.size()) - 1;
+    const int64_t blocks = (rows + kScanBlock - 1) / kScanBlock;
+    std::vector<int64_t> start(static_cast<std::size_t>(blocks) + 1, 0);
+    parallel_for(blocks, threads, [&](int64_t b) {
+        int64_t sum = 0;
+        for (int64_t r = b * kScanBlock, end = std::min(rows, r + kScanBlock); r < end; ++r) sum += offsets[r + 1];
+        start[b + 1] = sum;
+    });
+    for (int64_t b = 0; b < blocks; ++b) start[b + 1] += start[b];
+    parallel_for(blocks, threads, [&](int64_t b) {
+        int64_t run = start[b];
+        for (int64_t r = b * kScanBlock, end = std::min(rows, r + kScanBlock); r < end; ++r) offsets[r + 1] = run += offsets[r + 1];
+    });
 }
 
 }  // namespace
@@ -44,7 +59,7 @@ CsrList serial_vertex_triangles(const TriMesh& mesh) {
     list.offsets.assign(static_cast<std::size_t>(nv) + 1, 0);
     int64_t* counts = list.offsets.data() + 1;
     for (int64_t t = 0; t < nt; ++t) for_distinct_corners(tris + 3 * t, [&](int32_t v) { ++counts[v]; });
-    exclusive_scan_in_place(list.offsets);
+    exclusive_scan_in_place(list.offsets, 1);
     list.items.resize(static_cast<std::size_t>(list.offsets.back()));
     std::vector<int64_t> cursor(list.offsets.begin(), list.offsets.end() - 1);
     int32_t* items = list.items.data();
@@ -74,7 +89,10 @@ CsrList build_vertex_triangles(const TriMesh& mesh, int threads) {
     CsrList list;
     list.offsets.resize(static_cast<std::size_t>(nv) + 1);
     list.offsets[0] = 0;
-    for (int64_t v = 0; v < nv; ++v) list.offsets[v + 1] = list.offsets[v] + counts[v].load(std::memory_order_relaxed);
+    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t v = begin; v < end; ++v) list.offsets[v + 1] = counts[v].load(std::memory_order_relaxed);
+    });
+    exclusive_scan_in_place(list.offsets, threads);
     list.items.resize(static_cast<std::size_t>(list.offsets.back()));
     parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t v = begin; v < end; ++v) counts[v].store(0, std::memory_order_relaxed);  // now the rows' cursors
@@ -153,7 +171,7 @@ CsrList build_vertex_neighbours(const TriMesh& mesh, const CsrList& vt, int thre
         for (int64_t v = begin; v < end; ++v)
             list.offsets[v + 1] = collect_vertex_neighbours(tris, static_cast<int32_t>(v), vt.row(v), vt.size(v), raw.get() + 2 * vt.begin(v));
     });
-    exclusive_scan_in_place(list.offsets);
+    exclusive_scan_in_place(list.offsets, threads);
     list.items.resize(static_cast<std::size_t>(list.offsets.back()));
     parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t v = begin; v < end; ++v)

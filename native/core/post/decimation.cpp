@@ -1,12 +1,14 @@
 #include "post/decimation.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <cstring>
 #include <utility>
 #include <vector>
 
 #include "base/compaction.h"
+#include "base/greedy_selection.h"
 #include "base/parallel.h"
 #include "post/collapse.h"
 
@@ -21,35 +23,68 @@ constexpr int64_t kBlock = 4096;
 // fixed point on marching-cubes output; the cap bounds the work on pathological input.
 constexpr int kMaxDetectionPasses = 10;
 
-// Turns the adjacency of the working mesh into the one of the compacted mesh (same triangles, in the same order),
-// in place: rows of removed vertices (which have no triangles left) dropped and neighbour indices renumbered. The
-// renumbering (a random read per item) runs in parallel where the items lie; then the kept rows move down in vertex
-// order, a serial but sequential copy: new row starts never lie after old ones, so it overwrites nothing still
-// needed, and the renumbering keeps the order, so rows stay sorted. No rebuild, and no second copy of the lists.
-void renumber_adjacency(MeshAdjacency& adjacency, const std::vector<int32_t>& new_index, int threads) {
-    auto renumber_rows = [&](CsrList& list, bool renumber_items) {
-        const int64_t nv = static_cast<int64_t>(list.rows());
-        if (renumber_items)
-            parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-                for (int64_t v = begin; v < end; ++v)
-                    if (new_index[v] >= 0)
-                        for (int64_t k = list.offsets[v]; k < list.offsets[v + 1]; ++k) list.items[k] = new_index[list.items[k]];
-            });
-        int64_t write = 0, row = 0;
-        for (int64_t v = 0; v < nv; ++v) {
-            const int64_t begin = list.offsets[v], end = list.offsets[v + 1];  // offsets[v] is not yet overwritten
+constexpr int64_t kRowBlock = int64_t{1} << 14;
+
+// Drops the rows of `list` whose new_index is negative and moves the kept rows down, in place and in parallel over
+// fixed blocks of rows. A block's kept items go right after the earlier blocks' (destinations only lie at or below
+// sources), so a block may overwrite the end of an earlier block's source: each block first saves that end (the part
+// below its own and later blocks' destinations is never written by them), then all move at once, reading the saved
+// end where it lies. Within a block the copy runs forwards, writes never ahead of reads.
+void drop_rows(CsrList& list, const std::vector<int32_t>& new_index, int threads) {
+    const int64_t nv = static_cast<int64_t>(list.rows());
+    const int64_t blocks = (nv + kRowBlock - 1) / kRowBlock;
+    auto block_rows = [&](int64_t b) { return std::make_pair(b * kRowBlock, std::min(nv, (b + 1) * kRowBlock)); };
+    // dst[b]: where block b's kept items go; rows_before[b]: kept rows before block b.
+    std::vector<int64_t> dst(static_cast<std::size_t>(blocks) + 1, 0), rows_before(static_cast<std::size_t>(blocks) + 1, 0);
+    parallel_for(blocks, threads, [&](int64_t b) {
+        int64_t items = 0, rows = 0;
+        for (int64_t v = block_rows(b).first; v < block_rows(b).second; ++v)
+            if (new_index[v] >= 0) items += list.offsets[v + 1] - list.offsets[v], ++rows;
+        dst[b + 1] = items, rows_before[b + 1] = rows;
+    });
+    for (int64_t b = 0; b < blocks; ++b) dst[b + 1] += dst[b], rows_before[b + 1] += rows_before[b];
+    // The saved ends: block b's source items at or above the next block's destination.
+    std::vector<int64_t> saved_from(static_cast<std::size_t>(blocks)), saved_at(static_cast<std::size_t>(blocks) + 1, 0);
+    for (int64_t b = 0; b < blocks; ++b) {
+        const int64_t src_begin = list.offsets[block_rows(b).first], src_end = list.offsets[block_rows(b).second];
+        saved_from[b] = std::min(src_end, std::max(src_begin, dst[b + 1]));
+        saved_at[b + 1] = saved_at[b] + (src_end - saved_from[b]);
+    }
+    std::vector<int32_t> saved(static_cast<std::size_t>(saved_at[blocks]));
+    parallel_for(blocks, threads, [&](int64_t b) {
+        std::copy(list.items.begin() + saved_from[b], list.items.begin() + list.offsets[block_rows(b).second], saved.begin() + saved_at[b]);
+    });
+    std::vector<int64_t> offsets(static_cast<std::size_t>(rows_before[blocks]) + 1);
+    parallel_for(blocks, threads, [&](int64_t b) {
+        int64_t write = dst[b], row = rows_before[b];
+        const int64_t end_from_list = saved_from[b], saved_shift = saved_at[b] - saved_from[b];  // source position -> saved
+        for (int64_t v = block_rows(b).first; v < block_rows(b).second; ++v) {
             if (new_index[v] < 0) continue;
-            list.offsets[row] = write;
-            if (write != begin) std::memmove(list.items.data() + write, list.items.data() + begin, static_cast<std::size_t>(end - begin) * sizeof(int32_t));
-            write += end - begin;
-            ++row;
+            offsets[row++] = write;
+            const int64_t begin = list.offsets[v], end = list.offsets[v + 1], split = std::max(begin, std::min(end, end_from_list));
+            if (split > begin && write != begin)
+                std::memmove(list.items.data() + write, list.items.data() + begin, static_cast<std::size_t>(split - begin) * sizeof(int32_t));
+            write += split - begin;
+            for (int64_t k = split; k < end; ++k) list.items[write++] = saved[k + saved_shift];
         }
-        list.offsets[row] = write;
-        list.offsets.resize(static_cast<std::size_t>(row) + 1);
-        list.items.resize(static_cast<std::size_t>(write));
-    };
-    renumber_rows(adjacency.vertex_triangles, false);
-    renumber_rows(adjacency.vertex_neighbours, true);
+    });
+    offsets.back() = dst[blocks];
+    list.offsets.swap(offsets);
+    list.items.resize(static_cast<std::size_t>(dst[blocks]));
+}
+
+// Turns the adjacency of the working mesh into the one of the compacted mesh (same triangles, in the same order),
+// in place: rows of removed vertices dropped and neighbour indices renumbered, both in parallel. The renumbering
+// keeps the order, so rows stay sorted. No rebuild, and no second copy of the lists.
+void renumber_adjacency(MeshAdjacency& adjacency, const std::vector<int32_t>& new_index, int threads) {
+    CsrList& neighbours = adjacency.vertex_neighbours;
+    parallel_blocks(static_cast<int64_t>(neighbours.rows()), threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t v = begin; v < end; ++v)
+            if (new_index[v] >= 0)
+                for (int64_t k = neighbours.offsets[v]; k < neighbours.offsets[v + 1]; ++k) neighbours.items[k] = new_index[neighbours.items[k]];
+    });
+    drop_rows(adjacency.vertex_triangles, new_index, threads);
+    drop_rows(neighbours, new_index, threads);
 }
 
 // Replaces the rows of the claimed vertices (ascending in `touched`) by `fresh` and renumbers the other rows' items
@@ -242,24 +277,16 @@ void closed_two_ring(const MeshAdjacency& adj, const Candidate& cand, std::vecto
 }
 
 
-// Greedy selection in index order (sequential, O(candidates x two-ring size)): a candidate is taken when no vertex
-// of its closed two-ring was claimed earlier in this pass. claim[v] is the stamp of the candidate that took v;
-// stamps grow across passes, so claims of earlier passes (below the pass's first stamp) do not count.
+// The candidates a greedy pass in candidate order takes (one is taken when no vertex of its closed two-ring was
+// claimed by one taken before it), selected in parallel with the same result; their two-rings get claim[v] = pass.
 std::vector<Candidate> select_disjoint(const MeshAdjacency& adj, const std::vector<Candidate>& candidates, std::vector<int32_t>& claim,
-                                       int32_t& claim_stamp) {
+                                       int32_t pass, std::vector<std::atomic<int32_t>>& lowest, int threads) {
+    std::vector<std::vector<int32_t>> regions(candidates.size());
+    parallel_for(static_cast<int64_t>(candidates.size()), threads, [&](int64_t i) { closed_two_ring(adj, candidates[i], regions[i]); }, 16);
+    const std::vector<uint8_t> taken = select_greedy_disjoint(regions, claim, pass, lowest, threads);
     std::vector<Candidate> selected;
-    std::vector<int32_t> region;
-    const int32_t pass_first_stamp = claim_stamp;
-    for (const Candidate& cand : candidates) {
-        closed_two_ring(adj, cand, region);
-        bool free = true;
-        for (int32_t v : region)
-            if (claim[v] >= pass_first_stamp) { free = false; break; }
-        if (!free) continue;
-        for (int32_t v : region) claim[v] = claim_stamp;
-        ++claim_stamp;
-        selected.push_back(cand);
-    }
+    for (std::size_t i = 0; i < candidates.size(); ++i)
+        if (taken[i]) selected.push_back(candidates[i]);
     return selected;
 }
 
@@ -314,10 +341,10 @@ PassOutcome collapse_selected(const MeshAdjacency& adj, const std::vector<Candid
     return outcome;
 }
 
-std::vector<uint8_t> claimed_since(const std::vector<int32_t>& claim, int32_t first_stamp, int threads) {
+std::vector<uint8_t> claimed_in(const std::vector<int32_t>& claim, int32_t pass, int threads) {
     std::vector<uint8_t> claimed(claim.size());
     parallel_blocks(static_cast<int64_t>(claim.size()), threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t v = begin; v < end; ++v) claimed[v] = claim[v] >= first_stamp;
+        for (int64_t v = begin; v < end; ++v) claimed[v] = claim[v] == pass;
     });
     return claimed;
 }
@@ -361,8 +388,8 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
     std::vector<int32_t> triangles = std::move(mesh.triangles);
     std::vector<float> positions = std::move(mesh.vertices);
     std::vector<uint8_t> removed(nv, 0);
-    std::vector<int32_t> claim(nv, -1);
-    int32_t claim_stamp = 0;
+    std::vector<int32_t> claim(nv, -1);  // the pass whose selection claimed the vertex
+    std::vector<std::atomic<int32_t>> lowest;  // select_disjoint's scratch, made when there are candidates
     std::size_t removed_configurations = 0;
     bool changed = false;
 
@@ -371,8 +398,8 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
     for (int pass = 0; pass < kMaxDetectionPasses; ++pass) {
         const std::vector<Candidate> candidates = find_candidates(adj, threads, pinned);
         if (candidates.empty()) break;
-        const int32_t pass_first_stamp = claim_stamp;
-        const std::vector<Candidate> selected = select_disjoint(adj, candidates, claim, claim_stamp);
+        if (lowest.empty()) lowest = std::vector<std::atomic<int32_t>>(nv);
+        const std::vector<Candidate> selected = select_disjoint(adj, candidates, claim, pass, lowest, threads);
         CollapseMesh work(triangles, positions, adj.vertex_triangles, removed, threads);
         const PassOutcome outcome = collapse_selected(adj, selected, work, threads);
         removed_configurations += outcome.removed_configurations;
@@ -380,7 +407,7 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
         changed = changed || outcome.changed;
         if (!outcome.changed) break;
         adjacency_is_current = pass + 1 < kMaxDetectionPasses;  // the last pass's collapses are not patched in
-        if (adjacency_is_current) patch_adjacency(adj, work, triangles, claimed_since(claim, pass_first_stamp, threads), threads);
+        if (adjacency_is_current) patch_adjacency(adj, work, triangles, claimed_in(claim, pass, threads), threads);
     }
     if (changed) {
         claim = std::vector<int32_t>();

@@ -131,36 +131,34 @@ inline void umbrella_sum(const UmbrellaRows& rows, int64_t i, const float* in, f
         for (int32_t k = 1; k <= rest[0]; ++k) add(rest[k]);
 }
 
-// One Chebyshev term: t_out = 2 Y t_in - t_older (the first: t_out = Y t_in), written over t_older (read first).
-// Y = I + w (mean - I) per vertex; coordinates set in `frozen` are left as they are (y = t_in). With ACC the two
-// newest terms go into the sum at once, acc += c_in t_in + c_out t_out (t_in is loaded for the stencil anyway): the
-// accumulator is read and written every second term only.
+// One Chebyshev term on vertices [begin, end): t_out = 2 Y t_in - t_older (the first: t_out = Y t_in), written over
+// t_older (read first). Y = I + w (mean - I) per vertex; coordinates set in `frozen` are left as they are
+// (y = t_in). With ACC the two newest terms go into the sum at once, acc += c_in t_in + c_out t_out (t_in is loaded
+// for the stencil anyway): the accumulator is read and written every second term only.
 template <int D, bool FIRST, bool FROZEN, bool ACC>
 void chebyshev_term(const UmbrellaRows& rows, const float* steps, const uint8_t* frozen, const float* in, float* older_out, float* acc,
-                    float c_in, float c_out, int64_t nv, int threads) {
-    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t i = begin; i < end; ++i) {
-            const float* xi = in + D * i;
-            float s[D];
-            umbrella_sum<D>(rows, i, in, s);
-            for (int d = 0; d < D; ++d) {
-                float y = xi[d] + steps[i] * s[d];  // (Y t_in)_i
-                if (FROZEN && (frozen[i] >> d & 1u)) y = xi[d];
-                const float value = FIRST ? y : 2.0f * y - older_out[D * i + d];
-                older_out[D * i + d] = value;
-                if (ACC) acc[D * i + d] += c_in * xi[d] + c_out * value;
-            }
+                    float c_in, float c_out, int64_t begin, int64_t end) {
+    for (int64_t i = begin; i < end; ++i) {
+        const float* xi = in + D * i;
+        float s[D];
+        umbrella_sum<D>(rows, i, in, s);
+        for (int d = 0; d < D; ++d) {
+            float y = xi[d] + steps[i] * s[d];  // (Y t_in)_i
+            if (FROZEN && (frozen[i] >> d & 1u)) y = xi[d];
+            const float value = FIRST ? y : 2.0f * y - older_out[D * i + d];
+            older_out[D * i + d] = value;
+            if (ACC) acc[D * i + d] += c_in * xi[d] + c_out * value;
         }
-    });
+    }
 }
 
 template <int D, bool FIRST, bool FROZEN>
 void chebyshev_term(bool accumulate, const UmbrellaRows& rows, const float* steps, const uint8_t* frozen, const float* in, float* older_out,
-                    float* acc, float c_in, float c_out, int64_t nv, int threads) {
+                    float* acc, float c_in, float c_out, int64_t begin, int64_t end) {
     if (accumulate)
-        chebyshev_term<D, FIRST, FROZEN, true>(rows, steps, frozen, in, older_out, acc, c_in, c_out, nv, threads);
+        chebyshev_term<D, FIRST, FROZEN, true>(rows, steps, frozen, in, older_out, acc, c_in, c_out, begin, end);
     else
-        chebyshev_term<D, FIRST, FROZEN, false>(rows, steps, frozen, in, older_out, acc, c_in, c_out, nv, threads);
+        chebyshev_term<D, FIRST, FROZEN, false>(rows, steps, frozen, in, older_out, acc, c_in, c_out, begin, end);
 }
 
 template <int D, bool FROZEN>
@@ -197,30 +195,46 @@ int chebyshev_apply(std::vector<float>& x, const UmbrellaRows& rows, const std::
     std::vector<float>& acc = workspace.sum;
     older.resize(x.size() + 1), current.resize(x.size() + 1), acc.resize(x.size());
     const float c0 = static_cast<float>(c[0]);
-    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t i = begin; i < end; ++i)
-            for (int d = 0; d < D; ++d) {
-                const float t = x[D * i + d] - centre[d];
-                older[D * i + d] = t;
-                acc[D * i + d] = c0 * t;
-            }
-    });
-    // Term k is added together with term k - 1 when k is even, alone when it is the last and odd.
     auto coefficient = [&](int k) { return static_cast<float>(c[static_cast<std::size_t>(k)]); };
-    chebyshev_term<D, true, FROZEN>(degree == 1, rows, steps.data(), frozen, older.data(), current.data(), acc.data(), 0.0f, coefficient(1),
-                                    nv, threads);
-    for (int k = 2; k <= degree; ++k) {
-        const bool even = k % 2 == 0;
-        chebyshev_term<D, false, FROZEN>(even || k == degree, rows, steps.data(), frozen, current.data(), older.data(), acc.data(),
-                                         even ? coefficient(k - 1) : 0.0f, coefficient(k), nv, threads);
-        older.swap(current);
-    }
-    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t i = begin; i < end; ++i) {
-            if (steps[i] == 0.0f) continue;  // not moved: keeps its bits
-            for (int d = 0; d < D; ++d) x[D * i + d] = centre[d] + acc[D * i + d];
+    // All terms in one parallel region, a loop over fixed blocks per term: the barrier closing each loop (a term
+    // reads its neighbours' previous terms) is all the synchronisation, instead of a region started and joined per
+    // term, which counts on a machine whose other programs hold some cores. Every vertex's arithmetic is that of
+    // the serial loop, so the bits do not depend on the threads. Nothing in here throws.
+    const int64_t blocks = (nv + kBlock - 1) / kBlock;
+    const float* const centre_of = centre;
+#pragma omp parallel num_threads(resolve_threads(threads))
+    {
+        // Each thread swaps its own copies of the two term pointers after every term, so all agree.
+        float* t_older = older.data();
+        float* t_current = current.data();
+#pragma omp for schedule(dynamic, 1)
+        for (int64_t b = 0; b < blocks; ++b)
+            for (int64_t i = b * kBlock, end = std::min(nv, (b + 1) * kBlock); i < end; ++i)
+                for (int d = 0; d < D; ++d) {
+                    const float t = x[D * i + d] - centre_of[d];
+                    t_older[D * i + d] = t;
+                    acc[D * i + d] = c0 * t;
+                }
+        // Term k is added together with term k - 1 when k is even, alone when it is the last and odd.
+#pragma omp for schedule(dynamic, 1)
+        for (int64_t b = 0; b < blocks; ++b)
+            chebyshev_term<D, true, FROZEN>(degree == 1, rows, steps.data(), frozen, t_older, t_current, acc.data(), 0.0f, coefficient(1),
+                                            b * kBlock, std::min(nv, (b + 1) * kBlock));
+        for (int k = 2; k <= degree; ++k) {
+            const bool even = k % 2 == 0;
+#pragma omp for schedule(dynamic, 1)
+            for (int64_t b = 0; b < blocks; ++b)
+                chebyshev_term<D, false, FROZEN>(even || k == degree, rows, steps.data(), frozen, t_current, t_older, acc.data(),
+                                                 even ? coefficient(k - 1) : 0.0f, coefficient(k), b * kBlock, std::min(nv, (b + 1) * kBlock));
+            std::swap(t_older, t_current);
         }
-    });
+#pragma omp for schedule(dynamic, 1)
+        for (int64_t b = 0; b < blocks; ++b)
+            for (int64_t i = b * kBlock, end = std::min(nv, (b + 1) * kBlock); i < end; ++i) {
+                if (steps[i] == 0.0f) continue;  // not moved: keeps its bits
+                for (int d = 0; d < D; ++d) x[D * i + d] = centre_of[d] + acc[D * i + d];
+            }
+    }
     return degree;
 }
 

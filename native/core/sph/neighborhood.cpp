@@ -6,6 +6,7 @@
 #include <numeric>
 #include <string>
 
+#include "base/compaction.h"
 #include "base/errors.h"
 #include "base/parallel.h"
 
@@ -28,19 +29,45 @@ std::array<int64_t, 3> ParticleGrid::cell_coords(std::size_t cell) const {
 
 namespace {
 
+constexpr int64_t kGridBlock = int64_t{1} << 16;
+
 // Stable LSD radix sort of (dense cell index, input index) pairs by the cell index, 8 bits per pass over the bits
 // in use. The pairs arrive in input order, so the result is ordered by (cell, input index): a total order, the
-// same for any thread count. Several times faster than a comparison sort for a million particles.
-void radix_sort_by_cell(std::vector<std::pair<uint64_t, uint32_t>>& items, uint64_t largest_key) {
+// same for any thread count. Several times faster than a comparison sort for a million particles. Each pass counts
+// digits per fixed block in parallel; a block's items of one digit go after those of the same digit in earlier
+// blocks, which is where a serial stable pass puts them.
+void radix_sort_by_cell(std::vector<std::pair<uint64_t, uint32_t>>& items, uint64_t largest_key, int threads) {
+    const int64_t n = static_cast<int64_t>(items.size());
+    const int64_t blocks = (n + kGridBlock - 1) / kGridBlock;
     std::vector<std::pair<uint64_t, uint32_t>> buffer(items.size());
+    std::vector<std::array<std::size_t, 256>> next(static_cast<std::size_t>(blocks));
     for (int shift = 0; shift < 64 && (largest_key >> shift) != 0; shift += 8) {
-        std::array<std::size_t, 257> start{};
-        for (const auto& item : items) ++start[((item.first >> shift) & 0xff) + 1];
-        for (int digit = 0; digit < 256; ++digit) start[digit + 1] += start[digit];
-        for (const auto& item : items) buffer[start[(item.first >> shift) & 0xff]++] = item;
+        parallel_for(blocks, threads, [&](int64_t b) {
+            std::array<std::size_t, 256>& count = next[static_cast<std::size_t>(b)];
+            count.fill(0);
+            for (int64_t i = b * kGridBlock, end = std::min(n, i + kGridBlock); i < end; ++i) ++count[(items[i].first >> shift) & 0xff];
+        });
+        std::size_t start = 0;  // digit-major: all blocks' 0s, then all blocks' 1s, ...
+        for (int digit = 0; digit < 256; ++digit)
+            for (auto& count : next) {
+                const std::size_t c = count[digit];
+                count[digit] = start;
+                start += c;
+            }
+        parallel_for(blocks, threads, [&](int64_t b) {
+            std::array<std::size_t, 256>& at = next[static_cast<std::size_t>(b)];
+            for (int64_t i = b * kGridBlock, end = std::min(n, i + kGridBlock); i < end; ++i) buffer[at[(items[i].first >> shift) & 0xff]++] = items[i];
+        });
         items.swap(buffer);
     }
 }
+
+// Cell coordinate bounds of a block of particles, and its first particle whose coordinate is too large for the grid.
+struct CellBounds {
+    std::array<int64_t, 3> lo{std::numeric_limits<int64_t>::max(), std::numeric_limits<int64_t>::max(), std::numeric_limits<int64_t>::max()};
+    std::array<int64_t, 3> hi{std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::min()};
+    std::size_t first_too_large = std::numeric_limits<std::size_t>::max();  // a selected index
+};
 
 }  // namespace
 
@@ -51,26 +78,46 @@ ParticleGrid::ParticleGrid(const PositionsView& input, double cell_size, int thr
     if (n >= std::numeric_limits<uint32_t>::max()) throw InputError("too many particles: " + std::to_string(n) + " (at most 4294967294)");
 
     // Selected particles, in input order.
-    std::vector<uint32_t> selected;
-    selected.reserve(n);
-    for (std::size_t i = 0; i < n; ++i)
-        if (!keep || (*keep)[i]) selected.push_back(static_cast<uint32_t>(i));
+    const std::vector<uint32_t> selected = kept_indices<uint32_t>(static_cast<int64_t>(n), threads, [&](int64_t i) { return !keep || (*keep)[i]; });
     const std::size_t m = selected.size();
 
-    std::array<int64_t, 3> lo{std::numeric_limits<int64_t>::max(), std::numeric_limits<int64_t>::max(), std::numeric_limits<int64_t>::max()};
-    std::array<int64_t, 3> hi{std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::min()};
+    // Cells, and their bounds folded over fixed blocks (minima and maxima: any order gives the same). A coordinate too
+    // large is reported for the first such particle, as a serial loop would.
     std::vector<int64_t> cells(3 * m);
-    for (std::size_t s = 0; s < m; ++s) {
+    const CellBounds bounds = ordered_block_reduce(
+        static_cast<int64_t>(m), threads, kGridBlock, CellBounds{},
+        [&](int64_t begin, int64_t end, CellBounds& block) {
+            for (int64_t s = begin; s < end; ++s)
+                for (int k = 0; k < 3; ++k) {
+                    // Positions are stored as float; the cell is computed from the stored value so that queries agree.
+                    const double x = static_cast<float>(input.coord(selected[s], k));
+                    const double c = std::floor(x / cell_size);
+                    if (!(std::fabs(c) < 4.0e15)) {
+                        block.first_too_large = std::min(block.first_too_large, static_cast<std::size_t>(s));
+                        continue;
+                    }
+                    cells[3 * s + k] = static_cast<int64_t>(c);
+                    block.lo[k] = std::min(block.lo[k], cells[3 * s + k]);
+                    block.hi[k] = std::max(block.hi[k], cells[3 * s + k]);
+                }
+        },
+        [](CellBounds& total, const CellBounds& block) {
+            for (int k = 0; k < 3; ++k) {
+                total.lo[k] = std::min(total.lo[k], block.lo[k]);
+                total.hi[k] = std::max(total.hi[k], block.hi[k]);
+            }
+            total.first_too_large = std::min(total.first_too_large, block.first_too_large);
+        });
+    if (bounds.first_too_large < m) {
+        const std::size_t s = bounds.first_too_large;
         for (int k = 0; k < 3; ++k) {
-            // Positions are stored as float; the cell is computed from the stored value so that queries agree.
             const double x = static_cast<float>(input.coord(selected[s], k));
-            const double c = std::floor(x / cell_size);
-            if (!(std::fabs(c) < 4.0e15)) throw InputError("particle " + std::to_string(selected[s]) + " has a coordinate too large for the grid: " + std::to_string(x));
-            cells[3 * s + k] = static_cast<int64_t>(c);
-            lo[k] = std::min(lo[k], cells[3 * s + k]);
-            hi[k] = std::max(hi[k], cells[3 * s + k]);
+            if (!(std::fabs(std::floor(x / cell_size)) < 4.0e15))
+                throw InputError("particle " + std::to_string(selected[s]) + " has a coordinate too large for the grid: " + std::to_string(x));
         }
     }
+    const std::array<int64_t, 3>& lo = bounds.lo;
+    const std::array<int64_t, 3>& hi = bounds.hi;
     if (m == 0) {
         cell_start_.push_back(0);
         return;
@@ -94,11 +141,12 @@ ParticleGrid::ParticleGrid(const PositionsView& input, double cell_size, int thr
                        z = static_cast<uint64_t>(cells[3 * s + 2] - lo[2]);
         order[s] = {(z * ey + y) * ex + x, selected[s]};
     }, 4096);
-    radix_sort_by_cell(order, ex * ey * static_cast<uint64_t>(extent_[2]) - 1);
-    for (auto& item : order) {  // back to packed keys, which the cell lookups use
+    radix_sort_by_cell(order, ex * ey * static_cast<uint64_t>(extent_[2]) - 1, threads);
+    parallel_for(static_cast<int64_t>(m), threads, [&](int64_t s) {  // back to packed keys, which the cell lookups use
+        auto& item = order[s];
         const uint64_t x = item.first % ex, y = item.first / ex % ey, z = item.first / ex / ey;
         item.first = pack(static_cast<int64_t>(x) + lo[0], static_cast<int64_t>(y) + lo[1], static_cast<int64_t>(z) + lo[2]);
-    }
+    }, 4096);
 
     positions_.resize(3 * m);
     original_index_.resize(m);
@@ -107,12 +155,9 @@ ParticleGrid::ParticleGrid(const PositionsView& input, double cell_size, int thr
         original_index_[s] = i;
         for (int k = 0; k < 3; ++k) positions_[3 * s + k] = static_cast<float>(input.coord(i, k));
     }, 4096);
-    for (std::size_t s = 0; s < m; ++s) {
-        if (s == 0 || order[s].first != order[s - 1].first) {
-            cell_keys_.push_back(order[s].first);
-            cell_start_.push_back(static_cast<uint32_t>(s));
-        }
-    }
+    cell_start_ = kept_indices<uint32_t>(static_cast<int64_t>(m), threads, [&](int64_t s) { return s == 0 || order[s].first != order[s - 1].first; });
+    cell_keys_.resize(cell_start_.size());
+    parallel_for(static_cast<int64_t>(cell_start_.size()), threads, [&](int64_t c) { cell_keys_[c] = order[cell_start_[c]].first; }, 4096);
     cell_start_.push_back(static_cast<uint32_t>(m));
 }
 

@@ -65,17 +65,16 @@ std::vector<uint8_t> particles_in_box(const PositionsView& positions, std::vecto
 // (cells with a missing face neighbour): each carries about one kernel support squared of surface, meshed with
 // about 4 triangles per cube face area; about 140 bytes per triangle cover the mesh, the bricks' pieces before
 // stitching and the post-processing's adjacency (and the heat flow's fixed-width rows, ~20 of the 140).
-double estimate_mesh_bytes(const ParticleGrid& grid, double cube_edge, std::size_t* estimated_triangles) {
-    std::size_t boundary_cells = 0;
-    for (std::size_t cell = 0; cell < grid.num_cells(); ++cell) {
-        const auto c = grid.cell_coords(cell);
+double estimate_mesh_bytes(const ParticleGrid& grid, double cube_edge, int threads, std::size_t* estimated_triangles) {
+    const std::size_t boundary_cells = parallel_count(static_cast<int64_t>(grid.num_cells()), threads, [&](int64_t cell) {
+        const auto c = grid.cell_coords(static_cast<std::size_t>(cell));
         int neighbours = 0;
         const int64_t offsets[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
         for (const auto& o : offsets)
             grid.for_each_cell_in_box({c[0] + o[0], c[1] + o[1], c[2] + o[2]}, {c[0] + o[0], c[1] + o[1], c[2] + o[2]},
                                       [&](std::size_t) { ++neighbours; });
-        if (neighbours < 6) ++boundary_cells;
-    }
+        return neighbours < 6;
+    });
     const double ratio = grid.cell_size() / cube_edge;
     const double triangles = 4.0 * double(boundary_cells) * ratio * ratio;
     if (estimated_triangles) *estimated_triangles = static_cast<std::size_t>(std::min(triangles, 1e18));
@@ -97,7 +96,7 @@ SurfaceReconstruction reconstruct_surface(const PositionsView& positions, const 
     grid_timer.stop();
 
     std::size_t estimated_triangles = 0;
-    const double estimate = estimate_mesh_bytes(r.grid, cube, &estimated_triangles);
+    const double estimate = estimate_mesh_bytes(r.grid, cube, threads, &estimated_triangles);
     check_memory_budget(estimate, execution.memory_budget_bytes(),
                         "the surface mesh at cube size " + format_number(params.cube_size) + " r (about " + std::to_string(estimated_triangles) +
                             " triangles)");
