@@ -83,6 +83,8 @@ for name in $STEPS; do
         reconstruction_1M) step reconstruction_1M 600 --sizes 1M --modes reconstruction --repeat 1 --threads $THREADS ;;
         reconstruction_4M) step reconstruction_4M 600 --sizes 4M --modes reconstruction --repeat 1 --threads $THREADS ;;
         full_1M_reference) step full_1M_reference 600 --sizes 1M --modes full --repeat 1 --threads $THREADS ;;
+        reconstruction_13M) $PYTHON -c "import sys; sys.path.insert(0, 'bench'); import pathlib, scaling; scaling.generated_frame('13M', pathlib.Path('$FRAMES'))"
+            step reconstruction_13M 600 --sizes 13M --modes reconstruction --repeat 1 --threads $THREADS ;;
         # The build before this round's changes, carried as build/bin/meniscus_before: a same-machine baseline.
         full_1M_before) [ -x build/bin/meniscus_before ] && step full_1M_before 120 --sizes 1M --modes full --repeat 1 \
             --no-reference --threads $THREADS --cli build/bin/meniscus_before ;;
