@@ -173,8 +173,11 @@ def test_auto_shows_what_it_means_here():
     settings.threads_auto = settings.memory_budget_auto = True
     labels = draw(panels.MENISCUS_PT_performance)["labels"]
     cores = os.environ.get("OMP_NUM_THREADS") or str(os.cpu_count())
-    check(any(label.startswith("Threads: ") and cores in label for label in labels), labels)
-    check(any(label.startswith("Memory Limit: 75 % of ") and "GiB" in label for label in labels), labels)
+    # Each automatic value: its label, then what Auto means here on the row below.
+    check(labels[labels.index("Threads:") + 1] == f"all {cores} cores" or
+          labels[labels.index("Threads:") + 1] == f"{cores} (OMP_NUM_THREADS)", labels)
+    meaning = labels[labels.index("Memory Limit:") + 1]
+    check(meaning.startswith("75 % of ") and "GiB" in meaning, labels)
     drawn = draw(panels.MENISCUS_PT_performance)["props"]
     check("threads" not in drawn and "memory_budget" not in drawn, f"stale manual values drawn: {drawn}")
 

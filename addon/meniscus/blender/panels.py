@@ -55,19 +55,20 @@ class MENISCUS_PT_main(_SidebarPanel, bpy.types.Panel):
 
     def draw(self, context):
         layout = self.layout
-        row = layout.row(align=True)
-        row.operator("meniscus.add_sequence", text="Add Particles", icon="MOD_FLUIDSIM")
-        row.operator("meniscus.add_cache", text="Add Cache", icon="FILE_CACHE")
-        layout.operator("meniscus.add_object_surface", icon="PARTICLES")
+        # One button a row: at the sidebar's default width two side by side lose their labels.
+        column = layout.column(align=True)
+        column.operator("meniscus.add_sequence", text="Add Particle Sequence", icon="MOD_FLUIDSIM")
+        column.operator("meniscus.add_cache", text="Add Mesh Cache", icon="FILE_CACHE")
+        column.operator("meniscus.add_object_surface", icon="PARTICLES")
         obj = context.active_object
         if not surfaces.is_surface(obj):
             layout.label(text="Select a surface to edit it")
             return
         settings = obj.meniscus
-        row = layout.row(align=True)
-        row.label(text=obj.name, icon="OUTLINER_OB_MESH")
-        # The re-run button: rebuilds the current frame from scratch (also after files changed on disk).
-        row.operator("meniscus.reload", text="Rebuild", icon="FILE_REFRESH")
+        # The surface's name on a row of its own (beside a button it is cut to a few letters), then the re-run
+        # button: rebuilds the current frame from scratch (also after files changed on disk).
+        layout.label(text=obj.name, icon="OUTLINER_OB_MESH")
+        layout.operator("meniscus.reload", text="Rebuild", icon="FILE_REFRESH")
         # The status: what the handler did at the last frame (file, particles, triangles, seconds) or the error.
         box = layout.box()
         box.alert = settings.status_is_error
@@ -174,14 +175,17 @@ def draw_parameters(layout, settings, group):
         column = layout.column(align=True)
         column.active = parameter.matters(lambda name: _is_on(settings, name))
         if parameter.automatic is not None:
-            # [Neighbour Count 5.00][Auto]: the value greys out while the switch is on.
-            row = column.row(align=True)
+            # [Neighbour Count 5.00][Auto], the switch narrow so that the label keeps its words.
+            row = column.split(factor=0.72, align=True)
             if getattr(settings, parameter.name + "_auto"):
-                # What Auto means here, not the greyed manual value, which it ignores.
-                row.label(text=f"{parameter.label}: {properties.automatic_meaning(parameter.name)}")
+                # What Auto means here, not the greyed manual value, which it ignores; the meaning on a row of its
+                # own ("75 % of 31.2 GiB" beside a label does not fit the default sidebar).
+                row.label(text=parameter.label + ":")
+                row.prop(settings, parameter.name + "_auto", text="Auto", toggle=True)
+                column.label(text=properties.automatic_meaning(parameter.name), icon="BLANK1")
             else:
                 row.prop(settings, parameter.name)
-            row.prop(settings, parameter.name + "_auto", text="Auto", toggle=True)
+                row.prop(settings, parameter.name + "_auto", text="Auto", toggle=True)
         else:
             column.prop(settings, parameter.name)
 
@@ -211,7 +215,9 @@ class MENISCUS_PT_reconstruction(_ParameterPanel, bpy.types.Panel):
         col = layout.column(align=True)
         col.prop(settings, "cube_size")
         col.prop(settings, properties.RENDER_CUBE_SIZE)
-        layout.prop(settings, "render_failure")
+        column = layout.column(align=True)  # the label above its menu: beside it, it is cut to "If a Fr..."
+        column.label(text="If a Frame Fails:")
+        column.prop(settings, "render_failure", text="")
 
 
 class MENISCUS_PT_smoothing(_ParameterPanel, bpy.types.Panel):
