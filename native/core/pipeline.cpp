@@ -135,6 +135,8 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
             stats.set_count("smoothing_equivalent_iterations", report.iterations);
             stats.set_count("smoothing_applications", report.applications);  // on the mesh
             stats.set_count("smoothing_aggregates", static_cast<double>(report.aggregates));
+            stats.set_count("smoothing_parts", report.parts);
+            stats.set_count("smoothing_coarse_applications", report.coarse_applications);  // on the aggregates
             // Its three phases, to see which one limits the scaling (bench/scaling.py): not stages, so not in the total.
             stats.set_count("smoothing_flow_seconds", report.seconds_flow);
             stats.set_count("smoothing_return_seconds", report.seconds_return);

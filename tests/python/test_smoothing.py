@@ -101,14 +101,22 @@ def test_the_reach_is_the_default_and_set_in_particle_radii(hilbert2, tmp_path, 
 
 
 def test_same_mesh_for_any_thread_count(hilbert2):
-    # c = 0.75 low-passes the returned displacement on surface aggregates, c = 1.0 on the mesh itself.
-    for cube, on_aggregates in ((0.75, True), (1.0, False)):
+    # The returned displacement is low-passed on surface aggregates at every cube size (cells of 1.5 r at c = 0.75, of
+    # two edges at c = 1.0).
+    for cube in (0.75, 1.0):
         one = meniscus.reconstruct(hilbert2, R, cube_size=cube, threads=1, smoothing_reach=REACH)
         two = meniscus.reconstruct(hilbert2, R, cube_size=cube, threads=2, smoothing_reach=REACH)
         three = meniscus.reconstruct(hilbert2, R, cube_size=cube, threads=3, smoothing_reach=REACH)
-        assert (one.stats["counts"]["smoothing_aggregates"] > 0) == on_aggregates, cube
+        assert one.stats["counts"]["smoothing_aggregates"] > 0, cube
         assert np.array_equal(one.vertices, two.vertices) and np.array_equal(one.vertices, three.vertices)
         assert np.array_equal(one.normals, two.normals) and np.array_equal(one.normals, three.normals)
+    # On the mesh itself (aggregate_size 0; the fallback where the scene spans too many cells for the aggregates' keys).
+    raw = meniscus.reconstruct(hilbert2, R, cube_size=1.0, smoothing_iterations=0, output_weights=True, normals=False)
+    v, t = np.ascontiguousarray(raw.vertices, np.float32), np.ascontiguousarray(raw.triangles, np.int32)
+    runs = [_core.heat_smooth(v, t, raw.attributes["weights"], reach=2 * REACH * R, particle_radius=R, aggregate_size=0.0,
+                              threads=threads) for threads in (1, 2, 3)]
+    assert all(info["aggregates"] == 0 for _, info in runs)
+    assert np.array_equal(runs[0][0], runs[1][0]) and np.array_equal(runs[0][0], runs[2][0])
 
 
 def test_hfl_in_the_quality_report_and_inspect(hilbert2, tmp_path, cli):

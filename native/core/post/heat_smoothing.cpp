@@ -6,6 +6,7 @@
 #include <cstring>
 #include <cmath>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #include "base/errors.h"
@@ -38,6 +39,10 @@ double seconds_since(std::chrono::steady_clock::time_point& mark) {
 // million vertices: allocated once, their pages are not faulted in again by every filter).
 struct HeatFilterWorkspace {
     std::vector<float> older, current, sum;
+    // The point positions are taken relative to (a smoothing's parts: its bounding box's centre, found once; a filter
+    // alone finds its own).
+    bool has_centre = false;
+    float centre[3] = {0.0f, 0.0f, 0.0f};
 };
 
 // The operator's rows at a fixed width, kRowWidth columns per vertex, so the inner loop has no data-dependent trip
@@ -161,17 +166,10 @@ void chebyshev_term(bool accumulate, const UmbrellaRows& rows, const float* step
         chebyshev_term<D, FIRST, FROZEN, false>(rows, steps, frozen, in, older_out, acc, c_in, c_out, begin, end);
 }
 
-template <int D, bool FROZEN>
-int chebyshev_apply(std::vector<float>& x, const UmbrellaRows& rows, const std::vector<float>& steps, const uint8_t* frozen,
-                    const std::vector<double>& c, int threads, HeatFilterWorkspace& workspace) {
-    const int64_t nv = static_cast<int64_t>(steps.size());
-    const int degree = static_cast<int>(c.size()) - 1;
-    // Positions relative to the centre of their bounding box (small numbers wherever the mesh lies); the result is a
-    // convex combination of the terms (the heat kernel's coefficients are positive), accumulated directly: no stream
-    // of the start values is needed inside the loop.
-    float centre[D];
-    for (int d = 0; d < D; ++d) centre[d] = 0.0f;
-    if (D == 3) {
+// The centre of the bounding box of 3 floats per vertex.
+void bounding_box_centre(const std::vector<float>& x, int threads, float centre[3]) {
+    const int64_t nv = static_cast<int64_t>(x.size() / 3);
+    {
         // The box in fixed blocks folded in order: the serial loop's bits (down to which of +0 and -0 it keeps).
         struct Box {
             float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -180,12 +178,45 @@ int chebyshev_apply(std::vector<float>& x, const UmbrellaRows& rows, const std::
             nv, threads, 16 * kBlock, Box{},
             [&](int64_t begin, int64_t end, Box& b) {
                 for (int64_t i = begin; i < end; ++i)
-                    for (int d = 0; d < 3; ++d) b.lo[d] = std::min(b.lo[d], x[D * i + d]), b.hi[d] = std::max(b.hi[d], x[D * i + d]);
+                    for (int d = 0; d < 3; ++d) b.lo[d] = std::min(b.lo[d], x[3 * i + d]), b.hi[d] = std::max(b.hi[d], x[3 * i + d]);
             },
             [](Box& total, const Box& b) {
                 for (int d = 0; d < 3; ++d) total.lo[d] = std::min(total.lo[d], b.lo[d]), total.hi[d] = std::max(total.hi[d], b.hi[d]);
             });
-        for (int d = 0; d < D; ++d) centre[d] = 0.5f * box.lo[d] + 0.5f * box.hi[d];
+        for (int d = 0; d < 3; ++d) centre[d] = 0.5f * box.lo[d] + 0.5f * box.hi[d];
+    }
+}
+
+// The values a filter starts from and what it does with its result, per vertex and coordinate: by default x's own,
+// written back to x; a return starts from its prolonged values and moves the vertices by its result in the same
+// parallel region (each region's start and barrier count where other programs hold cores).
+struct ReadValues {
+    const float* x;
+    float operator()(int64_t i, int d, int dims) const { return x[dims * i + d]; }
+};
+struct WriteValues {
+    float* x;
+    void operator()(int64_t i, int d, int dims, float value) const { x[dims * i + d] = value; }
+};
+
+template <int D, bool FROZEN, class Start = ReadValues, class Finish = WriteValues>
+int chebyshev_apply(std::vector<float>& x, const UmbrellaRows& rows, const std::vector<float>& steps, const uint8_t* frozen,
+                    const std::vector<double>& c, int threads, HeatFilterWorkspace& workspace, Start start = Start{nullptr},
+                    Finish finish = Finish{nullptr}) {
+    if constexpr (std::is_same<Start, ReadValues>::value) start.x = x.data();
+    if constexpr (std::is_same<Finish, WriteValues>::value) finish.x = x.data();
+    const int64_t nv = static_cast<int64_t>(steps.size());
+    const int degree = static_cast<int>(c.size()) - 1;
+    // Positions relative to the centre of their bounding box (small numbers wherever the mesh lies); the result is a
+    // convex combination of the terms (the heat kernel's coefficients are positive), accumulated directly: no stream
+    // of the start values is needed inside the loop.
+    float centre[D];
+    for (int d = 0; d < D; ++d) centre[d] = 0.0f;
+    if (D == 3) {
+        float box_centre[3];
+        if (workspace.has_centre) std::copy(workspace.centre, workspace.centre + 3, box_centre);
+        else bounding_box_centre(x, threads, box_centre);
+        for (int d = 0; d < D; ++d) centre[d] = box_centre[d];
     }
     // Every element of the three is written before it is read: resizing a reused buffer needs no clearing. One float
     // more in the two the stencil reads, for the last vertex's 4-lane load (load_float4): never written by the filter
@@ -211,7 +242,7 @@ int chebyshev_apply(std::vector<float>& x, const UmbrellaRows& rows, const std::
         for (int64_t b = 0; b < blocks; ++b)
             for (int64_t i = b * kBlock, end = std::min(nv, (b + 1) * kBlock); i < end; ++i)
                 for (int d = 0; d < D; ++d) {
-                    const float t = x[D * i + d] - centre_of[d];
+                    const float t = start(i, d, D) - centre_of[d];
                     t_older[D * i + d] = t;
                     acc[D * i + d] = c0 * t;
                 }
@@ -231,8 +262,12 @@ int chebyshev_apply(std::vector<float>& x, const UmbrellaRows& rows, const std::
 #pragma omp for schedule(dynamic, 1)
         for (int64_t b = 0; b < blocks; ++b)
             for (int64_t i = b * kBlock, end = std::min(nv, (b + 1) * kBlock); i < end; ++i) {
-                if (steps[i] == 0.0f) continue;  // not moved: keeps its bits
-                for (int d = 0; d < D; ++d) x[D * i + d] = centre_of[d] + acc[D * i + d];
+                if (steps[i] == 0.0f) {  // not moved: keeps its bits
+                    if constexpr (!std::is_same<Start, ReadValues>::value)
+                        for (int d = 0; d < D; ++d) finish(i, d, D, start(i, d, D));
+                    continue;
+                }
+                for (int d = 0; d < D; ++d) finish(i, d, D, centre_of[d] + acc[D * i + d]);
             }
     }
     return degree;
@@ -269,7 +304,7 @@ void require_valid_walls(const WallConstraints& walls, std::size_t vertex_count)
 // areas). Every part's return needs them: float cross products (the normals only set the return's direction, and the
 // edges of one triangle are of one size), per corner, so that no per-triangle buffer raises the memory peak.
 void vertex_normals(const TriMesh& mesh, const MeshAdjacency& adjacency, std::vector<float>& normals, std::vector<float>* areas,
-                    int threads) {
+                    int threads, const std::vector<float>* before = nullptr, std::vector<float>* offset = nullptr) {
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
     const CsrList& vt = adjacency.vertex_triangles;
     normals.resize(mesh.vertices.size());
@@ -306,6 +341,11 @@ void vertex_normals(const TriMesh& mesh, const MeshAdjacency& adjacency, std::ve
             }
             for (int k = 0; k < 3; ++k) normals[3 * v + k] = static_cast<float>(sum[k] / l);
             if (areas) (*areas)[v] = static_cast<float>(area);
+            if (offset) {  // the normal component of the move from `before`, while the normal is at hand
+                float d = 0.0f;
+                for (int k = 0; k < 3; ++k) d += (mesh.vertices[3 * v + k] - (*before)[3 * v + k]) * normals[3 * v + k];
+                (*offset)[v] = d;
+            }
         }
     });
 }
@@ -349,19 +389,10 @@ ReturnAggregates return_aggregates(const TriMesh& mesh, const MeshAdjacency& adj
     return r;
 }
 
-// The low-pass of the returned displacement on the aggregates instead of the mesh: the field is smooth at the
-// return's reach (9 r), many cells wide, so the aggregates carry it whole, and the ~(9 r / e)^2 equivalent iterations
-// run on a graph (cell / e)^2 times smaller. Restricted and filtered as ReturnAggregates says, with the same heat
-// kernel (its N from the aggregates' own coupled distance), prolonged as a distance-weighted mean over the vertex's
-// aggregate and the ones coupled to it (no steps at aggregate borders), then blended by a fine low-pass of half a
-// cell. Measured against the mesh's own low-pass (c = 0.25 and 0.5): hfL, volume and droplets the same to the third
-// digit, with a third of the applications.
-int aggregate_low_pass(std::vector<float>& value, const TriMesh& mesh, const UmbrellaRows& rows, const std::vector<float>& steps,
-                       ReturnAggregates& coarse_surface, double cell, double reach, double tolerance,
-                       double edge, int threads, HeatSmoothingReport& report, HeatFilterWorkspace& workspace) {
-    const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
-    const SurfaceAggregates& aggregates = coarse_surface.aggregates;
-    std::vector<double> coarse = restrict_to_aggregates(aggregates, coarse_surface.valence, value.data(), 1, threads);
+// Values per aggregate (restricted as ReturnAggregates says) low-passed in place over `reach` on the aggregate graph:
+// the same heat kernel as the mesh's (its N from the aggregates' own coupled distance), as a normalised convolution.
+void coarse_low_pass(std::vector<double>& coarse, ReturnAggregates& coarse_surface, double reach, double tolerance, int threads,
+                     HeatSmoothingReport& report) {
     // A low-pass stays within the values it averages; the truncated series could overshoot where the denominator
     // below is small.
     double lowest = 0.0, highest = 0.0;
@@ -369,44 +400,76 @@ int aggregate_low_pass(std::vector<float>& value, const TriMesh& mesh, const Umb
         const auto range = std::minmax_element(coarse.begin(), coarse.end());
         lowest = *range.first, highest = *range.second;
     }
-    const std::vector<double>& centre = coarse_surface.centre;
+    const SurfaceAggregates& aggregates = coarse_surface.aggregates;
     const double coarse_edge = coarse_surface.coarse_edge;
     report.coarse_edge = coarse_edge;
-    if (coarse_edge > 0.0) {
-        const int64_t na = static_cast<int64_t>(aggregates.size());
-        const std::vector<double> c = heat_coefficients(std::min(std::pow(reach / coarse_edge, 2.0), kMaxIterations), tolerance);
-        // The filtered density is the same every part: filtered once, on the first return.
-        if (coarse_surface.filtered_density.empty()) {
-            coarse_surface.filtered_density = coarse_surface.density;
-            report.coarse_applications += aggregate_chebyshev(coarse_surface.filtered_density, 1, aggregates, {}, c, threads);
-        }
-        std::vector<double> mass(static_cast<std::size_t>(na));  // rho x per aggregate
-        for (int64_t a = 0; a < na; ++a) mass[a] = coarse_surface.density[a] * coarse[a];
-        report.coarse_applications += aggregate_chebyshev(mass, 1, aggregates, {}, c, threads);
-        for (int64_t a = 0; a < na; ++a)
-            if (coarse_surface.filtered_density[a] > 0.0)
-                coarse[a] = std::min(std::max(mass[a] / coarse_surface.filtered_density[a], lowest), highest);
+    if (!(coarse_edge > 0.0)) return;
+    const int64_t na = static_cast<int64_t>(aggregates.size());
+    const std::vector<double> c = heat_coefficients(std::min(std::pow(reach / coarse_edge, 2.0), kMaxIterations), tolerance);
+    // The filtered density is the same every part: filtered once, on the first return.
+    if (coarse_surface.filtered_density.empty()) {
+        coarse_surface.filtered_density = coarse_surface.density;
+        report.coarse_applications += aggregate_chebyshev(coarse_surface.filtered_density, 1, aggregates, {}, c, threads);
     }
-    // (1 - d^2 / (2 cell)^2)^2: smooth, zero two cells away, and the same bits with any maths library.
+    std::vector<double> mass(static_cast<std::size_t>(na));  // rho x per aggregate
+    for (int64_t a = 0; a < na; ++a) mass[a] = coarse_surface.density[a] * coarse[a];
+    report.coarse_applications += aggregate_chebyshev(mass, 1, aggregates, {}, c, threads);
+    for (int64_t a = 0; a < na; ++a)
+        if (coarse_surface.filtered_density[a] > 0.0)
+            coarse[a] = std::min(std::max(mass[a] / coarse_surface.filtered_density[a], lowest), highest);
+}
+
+// The value of the aggregates at vertex i: a distance-weighted mean over the vertex's aggregate and the ones coupled to
+// it (no steps at aggregate borders), (1 - d^2 / (2 cell)^2)^2: smooth, zero two cells away, and the same bits with any
+// maths library.
+float prolonged_value(const std::vector<double>& coarse, const TriMesh& mesh, const ReturnAggregates& coarse_surface, double cell, int64_t i) {
+    const SurfaceAggregates& aggregates = coarse_surface.aggregates;
+    const std::vector<double>& centre = coarse_surface.centre;
     const double falloff = 1.0 / (4.0 * cell * cell);
-    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t i = begin; i < end; ++i) {
-            const int32_t own = aggregates.of_vertex[i];
-            double sum = 0.0, total = 0.0;
-            auto add = [&](int64_t a) {
-                double d2 = 0.0;
-                for (int k = 0; k < 3; ++k) d2 += (centre[3 * a + k] - mesh.vertices[3 * i + k]) * (centre[3 * a + k] - mesh.vertices[3 * i + k]);
-                const double fall = std::max(0.0, 1.0 - d2 * falloff), phi = fall * fall;
-                sum += phi * coarse[a];
-                total += phi;
-            };
-            add(own);
-            for (int64_t k = aggregates.neighbours.begin(own); k < aggregates.neighbours.end(own); ++k) add(aggregates.neighbours.items[k]);
-            value[i] = static_cast<float>(total > 0.0 ? sum / total : coarse[own]);
+    const int32_t own = aggregates.of_vertex[i];
+    double sum = 0.0, total = 0.0;
+    auto add = [&](int64_t a) {
+        double d2 = 0.0;
+        for (int k = 0; k < 3; ++k) d2 += (centre[3 * a + k] - mesh.vertices[3 * i + k]) * (centre[3 * a + k] - mesh.vertices[3 * i + k]);
+        const double fall = std::max(0.0, 1.0 - d2 * falloff), phi = fall * fall;
+        sum += phi * coarse[a];
+        total += phi;
+    };
+    add(own);
+    for (int64_t k = aggregates.neighbours.begin(own); k < aggregates.neighbours.end(own); ++k) add(aggregates.neighbours.items[k]);
+    return static_cast<float>(total > 0.0 ? sum / total : coarse[own]);
+}
+
+// The low-pass of the returned displacement on the aggregates instead of the mesh: the field is smooth at the
+// return's reach (9 r), many cells wide, so the aggregates carry it whole, and the ~(9 r / e)^2 equivalent iterations
+// run on a graph (cell / e)^2 times smaller. Restricted, filtered (coarse_low_pass), prolonged, then blended by a fine
+// low-pass of half a cell, whose last pass moves the vertices back along their normals. Measured against the mesh's
+// own low-pass (c = 0.25 and 0.5): hfL, volume and droplets the same to the third digit, with a third of the
+// applications.
+int aggregate_return(std::vector<float>& offset, TriMesh& mesh, const std::vector<float>& normals, const UmbrellaRows& rows,
+                     const std::vector<float>& steps, ReturnAggregates& coarse_surface, double cell, double reach, double tolerance,
+                     double edge, int threads, HeatSmoothingReport& report, HeatFilterWorkspace& workspace) {
+    std::vector<double> coarse = restrict_to_aggregates(coarse_surface.aggregates, coarse_surface.valence, offset.data(), 1, threads);
+    coarse_low_pass(coarse, coarse_surface, reach, tolerance, threads, report);
+    const std::vector<double> c = heat_coefficients(std::min(std::pow(0.5 * cell / edge, 2.0), kMaxIterations), tolerance);
+    struct Prolonged {
+        const std::vector<double>* coarse;
+        const TriMesh* mesh;
+        const ReturnAggregates* surface;
+        double cell;
+        float operator()(int64_t i, int, int) const { return prolonged_value(*coarse, *mesh, *surface, cell, i); }
+    };
+    struct MoveBack {
+        float* vertices;
+        const float* normals;
+        void operator()(int64_t i, int, int, float back) const {
+            if (back == 0.0f) return;
+            for (int k = 0; k < 3; ++k) vertices[3 * i + k] -= back * normals[3 * i + k];
         }
-    });
-    return chebyshev_filter(value, 1, rows, steps, std::min(std::pow(0.5 * cell / edge, 2.0), kMaxIterations), tolerance, threads, nullptr,
-                            workspace);
+    };
+    // offset only sizes the filter from here on: Prolonged and MoveBack are its values.
+    return chebyshev_apply<1, false>(offset, rows, steps, nullptr, c, threads, workspace, Prolonged{&coarse, &mesh, &coarse_surface, cell},
+                                     MoveBack{mesh.vertices.data(), normals.data()});
 }
 
 }  // namespace
@@ -558,11 +621,11 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     const double tolerance = settings.return_tolerance > 0.0 ? settings.return_tolerance : kReturnTolerance;
     std::vector<float> before, offset, normals, areas;
     if (settings.local_return) offset.resize(static_cast<std::size_t>(nv));
-    // Aggregates for the return's low-pass when the mesh is fine (built once, from the first part's surface: the parts
-    // move vertices by a fraction of a cell).
+    // Aggregates for the return's low-pass (built once, from the first part's surface: the parts move vertices by a
+    // fraction of a cell).
     const double aggregate_size = settings.aggregate_size >= 0.0 ? settings.aggregate_size : kAggregateCell;
     const double cell = std::max(aggregate_size * radius, 2.0 * report.edge);
-    bool coarse_return = aggregate_size > 0.0 && cell <= kAggregateCellLimit * aggregate_size * radius;
+    bool coarse_return = aggregate_size > 0.0;
     ReturnAggregates aggregates;
     // Shared by every filter below: the rows, the steps (the flow's weighted, the return's plain) and the buffers.
     const CsrList& flow_neighbours = walls ? along_walls.vertex_neighbours : adjacency.vertex_neighbours;
@@ -572,6 +635,8 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     std::vector<float> flow_steps = umbrella_steps(flow_neighbours, weights, threads), return_steps;
     if (settings.local_return) return_steps = umbrella_steps(adjacency.vertex_neighbours, {}, threads);
     HeatFilterWorkspace workspace;
+    bounding_box_centre(mesh.vertices, threads, workspace.centre);  // the parts move the surface by a fraction of it
+    workspace.has_centre = true;
     for (int part = 0; part < report.parts; ++part) {
         if (settings.local_return) before = mesh.vertices;
         report.applications += chebyshev_filter(mesh.vertices, 3, flow_rows, flow_steps, report.iterations / report.parts, kPositionTolerance,
@@ -582,14 +647,7 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
         // The part's normal displacement, low-passed over the surface, goes back along the normals.
         // Of a smoothed surface: smooth enough as they are. The areas only for the aggregates' centres (built once).
         const bool build_aggregates = coarse_return && part == 0;
-        vertex_normals(mesh, adjacency, normals, build_aggregates ? &areas : nullptr, threads);
-        parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-            for (int64_t i = begin; i < end; ++i) {
-                float d = 0.0f;
-                for (int k = 0; k < 3; ++k) d += (mesh.vertices[3 * i + k] - before[3 * i + k]) * normals[3 * i + k];
-                offset[i] = d;
-            }
-        });
+        vertex_normals(mesh, adjacency, normals, build_aggregates ? &areas : nullptr, threads, &before, &offset);
         if (build_aggregates) {
             aggregates = return_aggregates(mesh, adjacency, areas, cell, threads);
             areas = std::vector<float>();
@@ -597,19 +655,18 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
             coarse_return = report.aggregates > 0;  // none: the scene spans too many cells for the keys
         }
         if (coarse_return) {
-            report.applications +=
-                aggregate_low_pass(offset, mesh, return_rows, return_steps, aggregates, cell, local_scale, tolerance, report.edge, threads,
-                                   report, workspace);
+            report.applications += aggregate_return(offset, mesh, normals, return_rows, return_steps, aggregates, cell, local_scale, tolerance,
+                                                    report.edge, threads, report, workspace);
         } else {
             report.applications += chebyshev_filter(offset, 1, return_rows, return_steps, return_iterations, tolerance, threads, nullptr, workspace);
+            parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+                for (int64_t i = begin; i < end; ++i) {
+                    const float back = offset[i];
+                    if (back == 0.0f) continue;
+                    for (int k = 0; k < 3; ++k) mesh.vertices[3 * i + k] -= back * normals[3 * i + k];
+                }
+            });
         }
-        parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-            for (int64_t i = begin; i < end; ++i) {
-                const float back = offset[i];
-                if (back == 0.0f) continue;
-                for (int k = 0; k < 3; ++k) mesh.vertices[3 * i + k] -= back * normals[3 * i + k];
-            }
-        });
         apply_walls(walls, mesh);
         report.seconds_return += seconds_since(mark);
     }

@@ -197,7 +197,8 @@ int aggregate_chebyshev(std::vector<double>& x, int dims, const SurfaceAggregate
     auto term = [&](auto dims_constant, const std::vector<double>& in, std::vector<double>& older_out, std::vector<double>& acc, double ck,
                     bool first) {
         constexpr int DIMS = decltype(dims_constant)::value;
-        parallel_blocks(count, threads, 1024, [&](int64_t begin, int64_t end) {
+        // A few thousand aggregates (coarse meshes, small frames) take less than a parallel region's start.
+        parallel_blocks(count, count > 4096 ? threads : 1, 1024, [&](int64_t begin, int64_t end) {
             for (int64_t a = begin; a < end; ++a) {
                 double s[DIMS] = {}, total = 0.0;
                 for (int64_t k = g.neighbours.begin(a); k < g.neighbours.end(a); ++k) {
