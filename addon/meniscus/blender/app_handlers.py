@@ -13,6 +13,9 @@ from .surfaces import surface_objects
 def meniscus_frame_change_post(scene, depsgraph=None):
     try:
         update.update_scene(scene, depsgraph=depsgraph)
+        # In an animation render the next frame is built in the background while Blender renders this one.
+        if render_state.is_rendering() and render_state.renders_more_frames():
+            update.build_next_render_frame(scene)
     except Exception:  # update_surface never raises; this guards the loop itself (e.g. a scene being freed)
         traceback.print_exc()
 

@@ -40,6 +40,8 @@ class _Memory:
         # showed, which tells the direction to prefetch in.
         self.frames = {}
         self.last_frame = {}
+        # Render frames found built ahead by the worker (tests and diagnostics read it).
+        self.frames_built_ahead = 0
 
     def frame_cache(self, pointer):
         frames = self.frames.get(pointer)
@@ -65,6 +67,9 @@ PLAYBACK_MEMORY_BYTES = 1 << 30
 PREFETCH_AHEAD = 3
 # A frame change whose frame the worker is building waits for it this long rather than building it a second time.
 PREFETCH_WAIT_SECONDS = 5.0
+# A render waits as long as the worker needs: its build started before this frame's and cannot be interrupted, so
+# building the frame a second time beside it could only finish later.
+RENDER_WAIT_SECONDS = 3600.0
 _prefetcher = playback.Prefetcher()
 # Blender quits without unregistering add-ons: a worker still inside the core when Python finalizes would be torn
 # down mid-call (std::terminate). Stopping it at exit waits for the frame under way.
@@ -204,8 +209,8 @@ def _file_source(obj, settings, mesh, scene_time, for_render):
     def work():
         if lookup.path is None:
             return _empty_for(mesh, lookup, scene_time, "file")
-        if for_render:  # renders build every frame afresh, at their own cube size
-            return _build_file(mesh, settings, lookup.path, arguments, wanted, for_render)
+        if for_render:  # at the render cube size: built ahead while the previous frame rendered, or now
+            return _render_file(mesh, settings, lookup.path, key, arguments, wanted)
         return _play_file(obj, settings, mesh, scene_time, pattern, lookup, key, arguments, wanted)
 
     return key, work, lookup.expected_path
@@ -246,12 +251,54 @@ def _prefetch(frames, settings, pattern, frame, direction, arguments, wanted):
             lookup = _lookup(listing, pattern, frame + direction * step, settings)
         except SurfaceError:
             break
-        if lookup.path is None:
-            continue
-        # Bound now: the worker reads only these plain values, never the settings.
-        jobs.append((_file_key(lookup, arguments, wanted, settings),
-                     lambda path=lookup.path: cache.reconstruct_file(path, dict(arguments), wanted)))
+        if lookup.path is not None:
+            jobs.append(_worker_job(lookup, arguments, wanted, settings))
     _prefetcher.want(frames, jobs)
+
+
+def _worker_job(lookup, arguments, wanted, settings):
+    """(key, build) of a file frame for the worker. Bound now: the worker reads only these plain values, never the
+    settings or anything else of bpy."""
+    arguments = dict(arguments)
+    return (_file_key(lookup, arguments, wanted, settings),
+            lambda path=lookup.path: cache.reconstruct_file(path, arguments, wanted))
+
+
+def _render_file(mesh, settings, path, key, arguments, wanted):
+    """A render's frame: taken from the worker when it built it ahead (waiting while it is still at it), else built
+    now. A frame the worker could not build is built here again, so its failure reaches the render policy."""
+    frames = _memory.frame_cache(mesh.as_pointer())
+    if key not in frames:
+        _prefetcher.wait_for(frames, key, RENDER_WAIT_SECONDS)
+    result = frames.take(key)  # a render shows each frame once: not kept
+    if result is None:
+        return _build_file(mesh, settings, path, arguments, wanted, True)
+    _memory.frames_built_ahead += 1
+    return _show_reconstruction(mesh, settings, os.path.basename(path) + " (render, built ahead)", result)
+
+
+def build_next_render_frame(scene):
+    """During an animation render: queues the next frame of every surface built from particle files on the worker,
+    which builds it while Blender renders this one. Never raises (a problem of that frame is reported when its own
+    frame change builds it)."""
+    next_frame = scene.frame_current + max(scene.frame_step, 1)
+    if next_frame > scene.frame_end:
+        return
+    for obj in surface_objects(scene):
+        try:
+            settings = obj.meniscus
+            if settings.use_native_cache or settings.use_cache or settings.source_type != "FILES":
+                continue  # baked meshes load fast; a live source exists only at the frame being evaluated
+            pattern = resolve_pattern(obj)
+            lookup = _lookup(_memory.sequences.frames(pattern), pattern, next_frame, settings)
+            if lookup.path is None:
+                continue
+            arguments = reconstruction_arguments(settings, for_render=True)
+            wanted = cache.parse_attribute_names(settings.attribute_names)
+            _prefetcher.want(_memory.frame_cache(obj.data.as_pointer()),
+                             [_worker_job(lookup, arguments, wanted, settings)])
+        except Exception:  # not this frame's problem: the next frame change builds it itself and reports
+            continue
 
 
 def _build_file(mesh, settings, path, arguments, wanted, for_render):
