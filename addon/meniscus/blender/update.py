@@ -171,13 +171,14 @@ def _set_status(settings, text, is_error=False):
         settings.status_is_error = is_error
 
 
-def _write(mesh, settings, surface):
-    """Writes a reconstructed or loaded surface into the Blender mesh; returns the seconds it took and a status
-    note on attributes stored under another name or not at all (the user must find what they asked for)."""
+def _write(mesh, settings, surface, prepared=None):
+    """Writes a reconstructed or loaded surface into the Blender mesh (prepared: its mesh_update.SurfaceWrite when the
+    worker built it); returns the seconds it took and a status note on attributes stored under another name or not
+    at all (the user must find what they asked for)."""
     started = time.perf_counter()
     normals = surface.normals if settings.use_custom_normals else None
     elsewhere = mesh_update.write_surface(mesh, surface.vertices, surface.triangles, normals, surface.attributes,
-                                          surface.quads)
+                                          surface.quads, prepared)
     notes = [f"'{name}' stored as '{stored}'" if stored else f"'{name}' not stored (no Blender type for its shape)"
              for name, stored in sorted(elsewhere.items())]
     return time.perf_counter() - started, "; ".join(notes)
@@ -231,8 +232,9 @@ def _play_file(obj, settings, mesh, scene_time, pattern, lookup, key, arguments,
     ready = result is not None
     if result is None:
         result = _prefetcher.wait_for(frames, key, PREFETCH_WAIT_SECONDS)
-    if result is None:
-        result = cache.reconstruct_file(lookup.path, arguments, wanted)
+    if result is None:  # kept with its prepared write: showing it again later only copies buffers
+        result = _with_surface_write(cache.reconstruct_file(lookup.path, arguments, wanted),
+                                     settings.use_custom_normals)
         frames.put(key, result)
     status = _show_reconstruction(mesh, settings, os.path.basename(lookup.path), result,
                                   "ready in memory" if ready else "")
@@ -260,8 +262,19 @@ def _worker_job(lookup, arguments, wanted, settings):
     """(key, build) of a file frame for the worker. Bound now: the worker reads only these plain values, never the
     settings or anything else of bpy."""
     arguments = dict(arguments)
+    custom_normals = settings.use_custom_normals
     return (_file_key(lookup, arguments, wanted, settings),
-            lambda path=lookup.path: cache.reconstruct_file(path, arguments, wanted))
+            lambda path=lookup.path: _with_surface_write(cache.reconstruct_file(path, arguments, wanted),
+                                                         custom_normals))
+
+
+def _with_surface_write(result, custom_normals):
+    """The result with the numpy work of its mesh write done beforehand (mesh_update.SurfaceWrite, no bpy: the worker
+    runs this), so that Blender's thread only copies buffers when it shows the frame."""
+    surface = result.mesh
+    result.surface_write = mesh_update.SurfaceWrite(surface.vertices, surface.triangles,
+                                                    surface.normals if custom_normals else None, surface.quads)
+    return result
 
 
 def _render_file(mesh, settings, path, key, arguments, wanted):
@@ -355,7 +368,7 @@ def _object_source(obj, settings, mesh, depsgraph, for_render):
 
 def _show_reconstruction(mesh, settings, label, result, note=""):
     """Writes a reconstruction (from files or from an object) into the mesh; returns the status lines."""
-    blender_seconds, attribute_note = _write(mesh, settings, result.mesh)
+    blender_seconds, attribute_note = _write(mesh, settings, result.mesh, getattr(result, "surface_write", None))
     timing = f"{blender_seconds:.2f} s in Blender, {note}" if note else \
         f"{result.seconds:.2f} s + {blender_seconds:.2f} s in Blender"
     return _status_lines(label, f"{result.particle_count:,} particles", _face_counts(result.mesh), timing,
