@@ -475,7 +475,7 @@ def update_surface(obj, scene, force=False, depsgraph=None):
         _memory.last_error[pointer] = message
         status = message if expected else f"Error: {message}"
         if for_render:
-            status = _apply_render_policy(obj, settings, mesh, scene_time, render_policy.failure_message(
+            status = _apply_render_policy(obj, settings, mesh, scene_time, frame, render_policy.failure_message(
                 name, frame, source, message))
         else:
             mesh_update.clear_surface(mesh)
@@ -491,7 +491,7 @@ def update_surface(obj, scene, force=False, depsgraph=None):
         return True
 
 
-def _apply_render_policy(obj, settings, mesh, scene_time, message):
+def _apply_render_policy(obj, settings, mesh, scene_time, frame, message):
     """In a final render, what a frame that cannot be built shows (see render_policy); returns the status text.
     STOP does not return in a render without a UI."""
     policy = settings.render_failure
@@ -505,7 +505,7 @@ def _apply_render_policy(obj, settings, mesh, scene_time, message):
     if policy == render_policy.EMPTY:
         print(f"{message}\nMeniscus: rendering the frame without this surface")
     else:
-        render_policy.stop_render(message)
+        render_policy.stop_render(message, frame)
     return message
 
 
