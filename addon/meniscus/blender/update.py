@@ -65,11 +65,10 @@ class _Memory:
 # PREFETCH_AHEAD frames in the direction of play built by one background thread (only bpy-free work runs there).
 PLAYBACK_MEMORY_BYTES = 1 << 30
 PREFETCH_AHEAD = 3
-# A frame change whose frame the worker is building waits for it this long rather than building it a second time.
-PREFETCH_WAIT_SECONDS = 5.0
-# A render waits as long as the worker needs: its build started before this frame's and cannot be interrupted, so
-# building the frame a second time beside it could only finish later.
-RENDER_WAIT_SECONDS = 3600.0
+# A frame change (viewport or render) whose frame the worker is building waits for it to finish: the build started
+# earlier and cannot be interrupted, so building the frame a second time beside it could only finish later (at 1 M
+# particles a 5 s limit made both builds share the cores: 21 s a frame instead of 11 s).
+WORKER_WAIT_SECONDS = 3600.0
 _prefetcher = playback.Prefetcher()
 # Blender quits without unregistering add-ons: a worker still inside the core when Python finalizes would be torn
 # down mid-call (std::terminate). Stopping it at exit waits for the frame under way.
@@ -231,7 +230,7 @@ def _play_file(obj, settings, mesh, scene_time, pattern, lookup, key, arguments,
     result = frames.get(key)
     ready = result is not None
     if result is None:
-        result = _prefetcher.wait_for(frames, key, PREFETCH_WAIT_SECONDS)
+        result = _prefetcher.wait_for(frames, key, WORKER_WAIT_SECONDS)
     if result is None:  # kept with its prepared write: showing it again later only copies buffers
         result = _with_surface_write(cache.reconstruct_file(lookup.path, arguments, wanted),
                                      settings.use_custom_normals)
@@ -282,7 +281,7 @@ def _render_file(mesh, settings, path, key, arguments, wanted):
     now. A frame the worker could not build is built here again, so its failure reaches the render policy."""
     frames = _memory.frame_cache(mesh.as_pointer())
     if key not in frames:
-        _prefetcher.wait_for(frames, key, RENDER_WAIT_SECONDS)
+        _prefetcher.wait_for(frames, key, WORKER_WAIT_SECONDS)
     result = frames.take(key)  # a render shows each frame once: not kept
     if result is None:
         return _build_file(mesh, settings, path, arguments, wanted, True)
