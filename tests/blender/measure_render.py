@@ -6,7 +6,7 @@ Saves the sample sequence at the default render settings with a camera and a Cyc
 (RENDER_THREADS, SURFACE_THREADS: Cycles' and the surface's threads, 0 = all; one each stands in for a renderer that
 leaves the CPU to the surface, as a GPU render does),
 then renders frames FIRST..LAST in a new process each way, as a farm node does (`blender -b scene.blend -s -e -a`),
-alternating the two twice, and reports each process's wall time and how many frames were built ahead."""
+alternating the two three times, and reports each process's wall time and how many frames were built ahead."""
 import os
 import sys
 import tempfile
