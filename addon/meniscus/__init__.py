@@ -21,12 +21,28 @@ bl_info = {
 import os  # noqa: E402
 import sys  # noqa: E402
 
-# Threads waiting at OpenMP barriers spin briefly, then sleep: the values the library's own __init__ sets (see
-# native/core/base/waiting.h for why). GNU libgomp reads them when the core loads, which here happens below (from its
-# copy), before the library's __init__ runs. A policy the user set stays as it is.
-if "OMP_WAIT_POLICY" not in os.environ:
-    os.environ.setdefault("GOMP_SPINCOUNT", "10000")
-    os.environ.setdefault("KMP_BLOCKTIME", "1")
+
+
+def _wait_briefly_at_barriers():
+    """Sets the library's OpenMP wait policy (its waiting.py) before the core loads, which here happens below from
+    its copy, before the library's __init__ would set it: GNU libgomp reads the policy only when it loads. The file
+    is loaded by its path: importing the library package would load the core first."""
+    import importlib.machinery
+    import importlib.util
+
+    path = os.path.join(os.path.dirname(__file__), "waiting.py")  # legacy zip: the library is bundled here
+    if not os.path.exists(path):  # extension: in the wheel Blender installed (not a stale module of an old one)
+        spec = importlib.machinery.PathFinder.find_spec("meniscus")
+        if spec is None or not spec.origin:
+            return
+        path = os.path.join(os.path.dirname(spec.origin), "waiting.py")
+    spec = importlib.util.spec_from_file_location("_meniscus_waiting", path)
+    waiting = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(waiting)
+    waiting.wait_briefly_at_barriers()
+
+
+_wait_briefly_at_barriers()
 
 from . import core_copy  # noqa: E402
 

@@ -62,6 +62,15 @@ class FrameCache:
             self._entries.move_to_end(key)
             return entry[0]
 
+    def take(self, key: Hashable):
+        """The result of key, removed from the cache (a render uses each frame once: it is not kept)."""
+        with self._lock:
+            entry = self._entries.pop(key, None)
+            if entry is None:
+                return None
+            self._bytes -= entry[1]
+            return entry[0]
+
     def __contains__(self, key: Hashable) -> bool:
         with self._lock:
             return key in self._entries

@@ -104,12 +104,13 @@ def make_small_render(scene, filepath=None):
         scene.render.image_settings.file_format = "PNG"
 
 
-def render_in_new_process(blend, first, last=None, report=None, timeout=180):
+def render_in_new_process(blend, first, last=None, report=None, timeout=180, environment=None):
     """Renders a saved .blend in a new process as a render farm node does: `blender -b scene.blend -f FIRST` (or
     -s FIRST -e LAST -a); as a bpy module, the same through bpy.ops.render.render(animation=True).
     The add-on comes from the saved preferences (the executable) or is enabled by name (a pipeline script on the
     module). report: an expression of an object whose first status line and face count are printed after each
-    rendered frame, as 'RENDERED <status> <faces>'. Returns the CompletedProcess (stdout holds stderr too)."""
+    rendered frame, as 'RENDERED <status> <faces>'; environment: variables set for the process on top of this one's.
+    Returns the CompletedProcess (stdout holds stderr too)."""
     import subprocess
 
     reporter = ""
@@ -130,7 +131,8 @@ def render_in_new_process(blend, first, last=None, report=None, timeout=180):
     else:
         frames = ["-f", str(first)] if last is None else ["-s", str(first), "-e", str(last), "-a"]
         command = [bpy.app.binary_path, "-b", blend, "--python-expr", "import bpy, sys\n" + reporter] + frames
-    return subprocess.run(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=timeout)
+    return subprocess.run(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=timeout,
+                          env=dict(os.environ, **(environment or {})))
 
 
 def mesh_counts(obj):

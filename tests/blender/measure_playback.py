@@ -18,6 +18,25 @@ arguments = sys.argv[sys.argv.index("--") + 1:]
 first_file, pace = os.path.abspath(arguments[0]), float(arguments[1])
 custom_normals = "no-normals" not in arguments[2:]
 addon = _support.enable_addon()
+mesh_update, update = _support.addon_modules(addon, "blender.mesh_update", "blender.update")
+# Seconds of each frame change spent in the mesh write and, within it, in the custom normals (Blender's thread).
+spent = {"write_surface": [], "_write_custom_normals": []}
+
+
+def _timed(name):
+    original = getattr(mesh_update, name)
+
+    def call(*args, **kwargs):
+        started = time.perf_counter()
+        try:
+            return original(*args, **kwargs)
+        finally:
+            spent[name].append(time.perf_counter() - started)
+    setattr(mesh_update, name, call)
+
+
+for _name in spent:
+    _timed(_name)
 _support.clear_scene()
 scene = bpy.context.scene
 obj = _support.add_sample_sequence(first_file)
@@ -37,6 +56,13 @@ fast = [cost for cost in costs if cost <= 0.05]
 print(f"custom normals {'on' if custom_normals else 'off'}; {len(costs)} frame changes at a {pace} s pace: {sum(ready)} ready in memory ({100 * sum(ready) / len(costs):.0f} %), "
       f"{len(fast)} cost <= 0.05 s ({100 * len(fast) / len(costs):.0f} %); cost median {statistics.median(costs):.3f} s, "
       f"ready median {statistics.median([c for c, r in zip(costs, ready) if r] or [0]):.3f} s, max {max(costs):.3f} s")
+kept = update._memory.frames.get(obj.data.as_pointer())
+builds = [entry[0].seconds for entry in kept._entries.values()] if kept is not None else []
+if builds:  # reading and reconstructing, by the worker or Blender's thread (the frames still in memory)
+    print(f"build per frame: median {statistics.median(builds):.2f} s, max {max(builds):.2f} s over {len(builds)} kept frames")
+for name, seconds in spent.items():
+    if seconds:
+        print(f"{name}: median {statistics.median(seconds[1:] or seconds):.3f} s over {len(seconds)} calls")
 sys.stdout.flush()
 addon.unregister()
 os._exit(0)

@@ -16,7 +16,7 @@ from _support import check  # noqa: E402
 
 addon = _support.enable_addon()
 api = addon.api
-update = _support.addon_modules(addon, "blender.update")
+update, mesh_update = _support.addon_modules(addon, "blender.update", "blender.mesh_update")
 _support.clear_scene()
 scene = bpy.context.scene
 scene.frame_set(25)
@@ -30,26 +30,27 @@ settings.is_surface = True
 
 
 class _OnlyTheWorkerReconstructs:
-    """Fails the test if Blender's thread reads or reconstructs particles (the worker thread may)."""
+    """Fails the test if Blender's thread reads or reconstructs particles or computes a mesh's edges (the worker
+    thread may: it prepares the mesh write too)."""
 
     def __enter__(self):
         import threading
 
-        self.saved = api.reconstruct, api.read_particles
+        self.saved = api.reconstruct, api.read_particles, mesh_update._compute_edges
         main = threading.main_thread()
 
         def guarded(original):
             def call(*args, **kwargs):
                 if threading.current_thread() is main:
-                    raise AssertionError("reconstruction on Blender's thread during playback")
+                    raise AssertionError(f"{original.__name__} on Blender's thread during playback")
                 return original(*args, **kwargs)
             return call
 
-        api.reconstruct, api.read_particles = guarded(api.reconstruct), guarded(api.read_particles)
+        api.reconstruct, api.read_particles, mesh_update._compute_edges = (guarded(function) for function in self.saved)
         return self
 
     def __exit__(self, *_exc):
-        api.reconstruct, api.read_particles = self.saved
+        api.reconstruct, api.read_particles, mesh_update._compute_edges = self.saved
 
 
 def wait_for_the_worker(timeout=120.0):

@@ -89,4 +89,24 @@ def test_empty_surface_renders_the_frame_without_it():
     check(len(reports) == 1 and "double_dam_break_0030.vtk" in reports[0] and reports[0].endswith(" 0"), reports)
 
 
+def test_interactive_render_sets_the_failed_frames_image_aside():
+    # Blender cannot be stopped from an interactive render: what it does there is called directly (this process has
+    # no UI, where stop_render exits). The image of the failed frame is renamed once written; others stay.
+    render_policy, app_handlers = _support.addon_modules(addon, "blender.render_policy", "blender.app_handlers")
+    app_handlers.meniscus_render_init(scene)
+    render_policy.report_unstoppable_failure("Meniscus: surface 'x' cannot be built for frame 30: test", 30)
+    written = {}
+    for frame in (29, 30):
+        scene.frame_current = frame
+        path = bpy.path.abspath(scene.render.frame_path(frame=frame))
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        with open(path, "wb") as image:
+            image.write(b"rendered without the surface" if frame == 30 else b"a good frame")
+        app_handlers.meniscus_render_write(scene)
+        written[frame] = path
+    check(os.path.exists(written[29]), "a good frame's image was moved")
+    check(not os.path.exists(written[30]), f"the failed frame's image stays as if fine: {written[30]}")
+    check(os.path.exists(written[30].replace(".png", ".meniscus-failed.png")), os.listdir(os.path.dirname(written[30])))
+
+
 _support.run(globals(), cleanup=addon.unregister)

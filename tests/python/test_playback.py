@@ -24,6 +24,15 @@ def test_cache_keeps_the_recently_used_within_its_budget():
     assert len(cache) == 1 and "huge" in cache
 
 
+def test_take_returns_a_result_once_and_frees_its_bytes():
+    cache = playback.FrameCache(budget_bytes=1 << 20)
+    cache.put("frame 30", _array(100))
+    cache.put("frame 31", _array(50))
+    assert cache.take("frame 30") is not None
+    assert "frame 30" not in cache and cache.bytes == 50 * 1024
+    assert cache.take("frame 30") is None
+
+
 def test_result_bytes_counts_arrays_inside_objects_once():
     class Result:
         def __init__(self):

@@ -6,13 +6,16 @@ import traceback
 import bpy
 from bpy.app.handlers import persistent
 
-from . import properties, render_state, update
+from . import properties, render_policy, render_state, update
 from .surfaces import surface_objects
 
 @persistent
 def meniscus_frame_change_post(scene, depsgraph=None):
     try:
         update.update_scene(scene, depsgraph=depsgraph)
+        # In an animation render the next frame is built in the background while Blender renders this one.
+        if render_state.is_rendering() and render_state.renders_more_frames():
+            update.build_next_render_frame(scene)
     except Exception:  # update_surface never raises; this guards the loop itself (e.g. a scene being freed)
         traceback.print_exc()
 
@@ -40,6 +43,16 @@ def meniscus_depsgraph_update_post(scene, depsgraph=None):
 @persistent
 def meniscus_render_init(scene, *_args):
     render_state.set_rendering(True)
+    render_policy.forget_failed_frames()
+
+
+@persistent
+def meniscus_render_write(scene, *_args):
+    # An interactive render cannot be stopped: the image of a frame whose surface failed is set aside once written.
+    try:
+        render_policy.set_aside_failed_image(scene)
+    except Exception:
+        traceback.print_exc()
 
 
 @persistent
@@ -147,6 +160,7 @@ def _handler_slots():
             (handlers.depsgraph_update_post, meniscus_depsgraph_update_post),
             (handlers.render_init, meniscus_render_init),
             (handlers.render_pre, meniscus_render_pre),
+            (handlers.render_write, meniscus_render_write),
             (handlers.render_complete, meniscus_render_done),
             (handlers.render_cancel, meniscus_render_done),
             (handlers.load_post, meniscus_load_post),

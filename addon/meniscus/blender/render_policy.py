@@ -4,8 +4,10 @@ cube size refused for memory, a parameter out of range): the surface setting "If
 - STOP (default): the render stops. From the command line or a farm (`blender -b scene.blend -f 22`, `-a`) the
   Blender process exits with status 1 after printing which surface, frame and file failed and why, so a farm marks
   the frame failed instead of accepting an image without water. In an interactive session Blender offers Python no
-  way to cancel its render job: the error goes to the status line, the console and a message box, and the surface
-  renders empty.
+  way to cancel its render job (3.4 to 5.2 have no operator or function for it; Esc is the user's): the error goes
+  to the status line, the console and a message box, the surface renders empty, and an animation render's image of
+  that frame is renamed once written (frame_0030.png -> frame_0030.meniscus-failed.png), so that the sequence has a
+  gap where the frame failed instead of an image that looks fine.
 - HOLD: the nearest earlier frame of the sequence that builds is shown instead (found the same way on every farm
   node, whatever it rendered before); when none of the few tried builds, the render stops as with STOP.
 - EMPTY: the frame renders without the surface, as the viewport shows it; the problem is printed.
@@ -27,6 +29,10 @@ ITEMS = [
 # parameter) fails at every frame and each try costs a reconstruction.
 HOLD_TRIES = 3
 EXIT_STATUS = 1
+# What a failed frame's image is renamed to in an interactive render (inserted before the file's extension).
+FAILED_IMAGE_MARK = ".meniscus-failed"
+# Frames of the running interactive render that failed under STOP, whose image must not stay as if fine.
+_failed_frames = set()
 
 
 def failure_message(object_name, frame, source, reason):
@@ -41,9 +47,10 @@ def earlier_frames(frames, failed_frame):
     return candidates[:HOLD_TRIES]
 
 
-def stop_render(message):
+def stop_render(message, frame):
     """Ends a final render that must not go on. Without a UI the process exits now with EXIT_STATUS (a handler's
-    exception would only be printed and the frame written); with a UI the user is told at once."""
+    exception would only be printed and the frame written); with a UI the user is told at once and the frame's
+    image is set aside when it is written (set_aside_failed_image)."""
     text = f"{message}\nMeniscus: render stopped (the surface setting 'If a Frame Fails' can hold the last good " \
            f"frame or render an empty surface instead)"
     print(text, file=sys.stderr)
@@ -52,7 +59,41 @@ def stop_render(message):
         sys.stderr.flush()
         # Exiting here, not raising: Blender prints a handler's exception and renders the frame anyway.
         os._exit(EXIT_STATUS)
+    report_unstoppable_failure(message, frame)
+
+
+def report_unstoppable_failure(message, frame):
+    """An interactive render goes on: the user is told at once and the frame's image will be set aside."""
+    _failed_frames.add(frame)
     _show_message_box(message)
+
+
+def set_aside_failed_image(scene):
+    """After an interactive render wrote a frame (render_write): renames the image of a frame that failed under STOP
+    to <name>.meniscus-failed<ext>, so that nothing downstream takes it for a good frame (a movie file cannot be
+    changed: the message stays the only sign). Returns the new path, or None."""
+    frame = scene.frame_current
+    if frame not in _failed_frames:
+        return None
+    _failed_frames.discard(frame)
+    if scene.render.is_movie_format:
+        print(f"Meniscus: frame {frame} of the movie renders without the surface (see the error above)")
+        return None
+    path = bpy.path.abspath(scene.render.frame_path(frame=frame))
+    root, extension = os.path.splitext(path)
+    failed_path = root + FAILED_IMAGE_MARK + extension
+    try:
+        os.replace(path, failed_path)
+    except OSError as error:
+        print(f"Meniscus: could not rename the failed frame's image {path}: {error}")
+        return None
+    print(f"Meniscus: frame {frame} rendered without the surface; its image was renamed to {failed_path}")
+    return failed_path
+
+
+def forget_failed_frames():
+    """A render ended: frames that failed in it are not this next render's."""
+    _failed_frames.clear()
 
 
 def _show_message_box(message):

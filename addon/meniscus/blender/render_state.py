@@ -4,7 +4,14 @@ A flag of our own, set between render_init and render_complete/render_cancel, be
 bpy.app.is_job_running('RENDER') is False for renders from the command line (`blender -b -a` runs no
 window-manager job), where the render parameters matter just as much.
 """
+import os
+import sys
+
 import bpy
+
+# "0" turns off building the next frame while a frame renders (it holds a second render-size surface in memory and
+# shares the CPU with a CPU renderer): MENISCUS_RENDER_BUILD_AHEAD=0 blender -b scene.blend -a
+BUILD_AHEAD_VARIABLE = "MENISCUS_RENDER_BUILD_AHEAD"
 
 _render_in_progress = False
 
@@ -25,3 +32,17 @@ def is_rendering():
         except Exception:
             pass
     return False
+
+
+def renders_more_frames():
+    """Whether a frame change inside a render may be followed by more frames of the same render, so that building
+    the next one ahead is worth it. A still render (F12) never changes the frame; `blender -b scene.blend -f 30` does,
+    as an animation of one frame, which only its command line tells apart."""
+    if os.environ.get(BUILD_AHEAD_VARIABLE, "1").strip() == "0":
+        return False
+    if not bpy.app.background or not bpy.app.binary_path:  # the UI, or the bpy module driven by a script
+        return True
+    arguments = sys.argv[:sys.argv.index("--")] if "--" in sys.argv else sys.argv
+    renders_animation = "-a" in arguments or "--render-anim" in arguments
+    renders_frames = "-f" in arguments or "--render-frame" in arguments
+    return renders_animation or not renders_frames

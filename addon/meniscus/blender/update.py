@@ -40,6 +40,8 @@ class _Memory:
         # showed, which tells the direction to prefetch in.
         self.frames = {}
         self.last_frame = {}
+        # Render frames found built ahead by the worker (tests and diagnostics read it).
+        self.frames_built_ahead = 0
 
     def frame_cache(self, pointer):
         frames = self.frames.get(pointer)
@@ -63,8 +65,10 @@ class _Memory:
 # PREFETCH_AHEAD frames in the direction of play built by one background thread (only bpy-free work runs there).
 PLAYBACK_MEMORY_BYTES = 1 << 30
 PREFETCH_AHEAD = 3
-# A frame change whose frame the worker is building waits for it this long rather than building it a second time.
-PREFETCH_WAIT_SECONDS = 5.0
+# A frame change (viewport or render) whose frame the worker is building waits for it to finish: the build started
+# earlier and cannot be interrupted, so building the frame a second time beside it could only finish later (at 1 M
+# particles a 5 s limit made both builds share the cores: 21 s a frame instead of 11 s).
+WORKER_WAIT_SECONDS = 3600.0
 _prefetcher = playback.Prefetcher()
 # Blender quits without unregistering add-ons: a worker still inside the core when Python finalizes would be torn
 # down mid-call (std::terminate). Stopping it at exit waits for the frame under way.
@@ -166,13 +170,14 @@ def _set_status(settings, text, is_error=False):
         settings.status_is_error = is_error
 
 
-def _write(mesh, settings, surface):
-    """Writes a reconstructed or loaded surface into the Blender mesh; returns the seconds it took and a status
-    note on attributes stored under another name or not at all (the user must find what they asked for)."""
+def _write(mesh, settings, surface, prepared=None):
+    """Writes a reconstructed or loaded surface into the Blender mesh (prepared: its mesh_update.SurfaceWrite when the
+    worker built it); returns the seconds it took and a status note on attributes stored under another name or not
+    at all (the user must find what they asked for)."""
     started = time.perf_counter()
     normals = surface.normals if settings.use_custom_normals else None
     elsewhere = mesh_update.write_surface(mesh, surface.vertices, surface.triangles, normals, surface.attributes,
-                                          surface.quads)
+                                          surface.quads, prepared)
     notes = [f"'{name}' stored as '{stored}'" if stored else f"'{name}' not stored (no Blender type for its shape)"
              for name, stored in sorted(elsewhere.items())]
     return time.perf_counter() - started, "; ".join(notes)
@@ -204,8 +209,8 @@ def _file_source(obj, settings, mesh, scene_time, for_render):
     def work():
         if lookup.path is None:
             return _empty_for(mesh, lookup, scene_time, "file")
-        if for_render:  # renders build every frame afresh, at their own cube size
-            return _build_file(mesh, settings, lookup.path, arguments, wanted, for_render)
+        if for_render:  # at the render cube size: built ahead while the previous frame rendered, or now
+            return _render_file(mesh, settings, lookup.path, key, arguments, wanted)
         return _play_file(obj, settings, mesh, scene_time, pattern, lookup, key, arguments, wanted)
 
     return key, work, lookup.expected_path
@@ -225,9 +230,10 @@ def _play_file(obj, settings, mesh, scene_time, pattern, lookup, key, arguments,
     result = frames.get(key)
     ready = result is not None
     if result is None:
-        result = _prefetcher.wait_for(frames, key, PREFETCH_WAIT_SECONDS)
-    if result is None:
-        result = cache.reconstruct_file(lookup.path, arguments, wanted)
+        result = _prefetcher.wait_for(frames, key, WORKER_WAIT_SECONDS)
+    if result is None:  # kept with its prepared write: showing it again later only copies buffers
+        result = _with_surface_write(cache.reconstruct_file(lookup.path, arguments, wanted),
+                                     settings.use_custom_normals)
         frames.put(key, result)
     status = _show_reconstruction(mesh, settings, os.path.basename(lookup.path), result,
                                   "ready in memory" if ready else "")
@@ -246,12 +252,65 @@ def _prefetch(frames, settings, pattern, frame, direction, arguments, wanted):
             lookup = _lookup(listing, pattern, frame + direction * step, settings)
         except SurfaceError:
             break
-        if lookup.path is None:
-            continue
-        # Bound now: the worker reads only these plain values, never the settings.
-        jobs.append((_file_key(lookup, arguments, wanted, settings),
-                     lambda path=lookup.path: cache.reconstruct_file(path, dict(arguments), wanted)))
+        if lookup.path is not None:
+            jobs.append(_worker_job(lookup, arguments, wanted, settings))
     _prefetcher.want(frames, jobs)
+
+
+def _worker_job(lookup, arguments, wanted, settings):
+    """(key, build) of a file frame for the worker. Bound now: the worker reads only these plain values, never the
+    settings or anything else of bpy."""
+    arguments = dict(arguments)
+    custom_normals = settings.use_custom_normals
+    return (_file_key(lookup, arguments, wanted, settings),
+            lambda path=lookup.path: _with_surface_write(cache.reconstruct_file(path, arguments, wanted),
+                                                         custom_normals))
+
+
+def _with_surface_write(result, custom_normals):
+    """The result with the numpy work of its mesh write done beforehand (mesh_update.SurfaceWrite, no bpy: the worker
+    runs this), so that Blender's thread only copies buffers when it shows the frame."""
+    surface = result.mesh
+    result.surface_write = mesh_update.SurfaceWrite(surface.vertices, surface.triangles,
+                                                    surface.normals if custom_normals else None, surface.quads)
+    return result
+
+
+def _render_file(mesh, settings, path, key, arguments, wanted):
+    """A render's frame: taken from the worker when it built it ahead (waiting while it is still at it), else built
+    now. A frame the worker could not build is built here again, so its failure reaches the render policy."""
+    frames = _memory.frame_cache(mesh.as_pointer())
+    if key not in frames:
+        _prefetcher.wait_for(frames, key, WORKER_WAIT_SECONDS)
+    result = frames.take(key)  # a render shows each frame once: not kept
+    if result is None:
+        return _build_file(mesh, settings, path, arguments, wanted, True)
+    _memory.frames_built_ahead += 1
+    return _show_reconstruction(mesh, settings, os.path.basename(path) + " (render, built ahead)", result)
+
+
+def build_next_render_frame(scene):
+    """During an animation render: queues the next frame of every surface built from particle files on the worker,
+    which builds it while Blender renders this one. Never raises (a problem of that frame is reported when its own
+    frame change builds it)."""
+    next_frame = scene.frame_current + max(scene.frame_step, 1)
+    if next_frame > scene.frame_end:
+        return
+    for obj in surface_objects(scene):
+        try:
+            settings = obj.meniscus
+            if settings.use_native_cache or settings.use_cache or settings.source_type != "FILES":
+                continue  # baked meshes load fast; a live source exists only at the frame being evaluated
+            pattern = resolve_pattern(obj)
+            lookup = _lookup(_memory.sequences.frames(pattern), pattern, next_frame, settings)
+            if lookup.path is None:
+                continue
+            arguments = reconstruction_arguments(settings, for_render=True)
+            wanted = cache.parse_attribute_names(settings.attribute_names)
+            _prefetcher.want(_memory.frame_cache(obj.data.as_pointer()),
+                             [_worker_job(lookup, arguments, wanted, settings)])
+        except Exception:  # not this frame's problem: the next frame change builds it itself and reports
+            continue
 
 
 def _build_file(mesh, settings, path, arguments, wanted, for_render):
@@ -308,7 +367,7 @@ def _object_source(obj, settings, mesh, depsgraph, for_render):
 
 def _show_reconstruction(mesh, settings, label, result, note=""):
     """Writes a reconstruction (from files or from an object) into the mesh; returns the status lines."""
-    blender_seconds, attribute_note = _write(mesh, settings, result.mesh)
+    blender_seconds, attribute_note = _write(mesh, settings, result.mesh, getattr(result, "surface_write", None))
     timing = f"{blender_seconds:.2f} s in Blender, {note}" if note else \
         f"{result.seconds:.2f} s + {blender_seconds:.2f} s in Blender"
     return _status_lines(label, f"{result.particle_count:,} particles", _face_counts(result.mesh), timing,
@@ -415,7 +474,7 @@ def update_surface(obj, scene, force=False, depsgraph=None):
         _memory.last_error[pointer] = message
         status = message if expected else f"Error: {message}"
         if for_render:
-            status = _apply_render_policy(obj, settings, mesh, scene_time, render_policy.failure_message(
+            status = _apply_render_policy(obj, settings, mesh, scene_time, frame, render_policy.failure_message(
                 name, frame, source, message))
         else:
             mesh_update.clear_surface(mesh)
@@ -431,7 +490,7 @@ def update_surface(obj, scene, force=False, depsgraph=None):
         return True
 
 
-def _apply_render_policy(obj, settings, mesh, scene_time, message):
+def _apply_render_policy(obj, settings, mesh, scene_time, frame, message):
     """In a final render, what a frame that cannot be built shows (see render_policy); returns the status text.
     STOP does not return in a render without a UI."""
     policy = settings.render_failure
@@ -445,7 +504,7 @@ def _apply_render_policy(obj, settings, mesh, scene_time, message):
     if policy == render_policy.EMPTY:
         print(f"{message}\nMeniscus: rendering the frame without this surface")
     else:
-        render_policy.stop_render(message)
+        render_policy.stop_render(message, frame)
     return message
 
 
