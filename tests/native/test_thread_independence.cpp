@@ -96,7 +96,7 @@ TEST_CASE("adjacency rows over several scan blocks hold each vertex's own triang
         }
     std::sort(edges.begin(), edges.end());
     edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-    std::vector<int32_t> expected_neighbours;
+    UninitializedVector<int32_t> expected_neighbours;
     std::vector<int64_t> neighbours_of(mesh.num_vertices(), 0);
     for (const auto& e : edges) expected_neighbours.push_back(e.second), ++neighbours_of[e.first];
     for (int threads : kThreadCounts) {
@@ -255,7 +255,7 @@ TEST_CASE("the particle grid is the same at every thread count, sorted by cell a
         for (int k = 0; k < 3; ++k) c[k] = static_cast<int64_t>(std::floor(double(positions[3 * i + k]) / cell));
         return std::array<int64_t, 3>{c[2], c[1], c[0]};
     };
-    std::vector<uint32_t> expected;
+    UninitializedVector<uint32_t> expected;
     for (uint32_t i = 0; i < n; ++i)
         if (keep[i]) expected.push_back(i);
     std::stable_sort(expected.begin(), expected.end(), [&](uint32_t a, uint32_t b) { return cell_of(a) < cell_of(b); });

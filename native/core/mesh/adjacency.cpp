@@ -18,7 +18,7 @@ constexpr int64_t kScanBlock = int64_t{1} << 16;
 
 // offsets[0] == 0 and offsets[r + 1] holds the count of row r: turned into row starts. Fixed blocks: their totals in
 // parallel, the totals scanned, then each block's running sum from its start (integer sums: exact in any order).
-void exclusive_scan_in_place(std::vector<int64_t>& offsets, int threads) {
+void exclusive_scan_in_place(UninitializedVector<int64_t>& offsets, int threads) {
     const int64_t rows = static_cast<int64_t>(offsets.size()) - 1;
     const int64_t blocks = (rows + kScanBlock - 1) / kScanBlock;
     std::vector<int64_t> start(static_cast<std::size_t>(blocks) + 1, 0);
@@ -81,7 +81,11 @@ CsrList build_vertex_triangles(const TriMesh& mesh, int threads) {
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
     const int64_t nt = static_cast<int64_t>(mesh.num_triangles());
     const int32_t* tris = mesh.triangles.data();
-    std::vector<std::atomic<int32_t>> counts(static_cast<std::size_t>(nv));  // zero (value-initialised)
+    // Counters zeroed in parallel (a vector of atomics would zero them on this thread, taking all its page faults).
+    std::unique_ptr<std::atomic<int32_t>[]> counts(new std::atomic<int32_t>[static_cast<std::size_t>(nv)]);
+    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t v = begin; v < end; ++v) counts[v].store(0, std::memory_order_relaxed);
+    });
     parallel_blocks(nt, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t t = begin; t < end; ++t)
             for_distinct_corners(tris + 3 * t, [&](int32_t v) { counts[v].fetch_add(1, std::memory_order_relaxed); });
@@ -159,11 +163,12 @@ CsrList build_vertex_neighbours(const TriMesh& mesh, const CsrList& vt, int thre
         }
     });
     if (closed_manifold.load()) {
-        list.offsets = vt.offsets;
+        copy_in_parallel(vt.offsets.data(), vt.offsets.size(), list.offsets, threads);
         return list;
     }
-    list.items = std::vector<int32_t>();  // not held beside the scratch array below
-    list.offsets.assign(static_cast<std::size_t>(nv) + 1, 0);
+    list.items = UninitializedVector<int32_t>();  // not held beside the scratch array below
+    list.offsets.resize(static_cast<std::size_t>(nv) + 1);  // [v + 1] written for every v below
+    list.offsets[0] = 0;
     // Every triangle around v offers two candidates: gather them into v's slice of a scratch array (twice the
     // size of v's triangle row), sort and deduplicate in place, then compact all rows into the result.
     std::unique_ptr<int32_t[]> raw(new int32_t[2 * vt.items.size() + 1]);  // uninitialised: every slot used is written

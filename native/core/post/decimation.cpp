@@ -10,6 +10,7 @@
 #include "base/compaction.h"
 #include "base/greedy_selection.h"
 #include "base/parallel.h"
+#include "base/uninitialized_vector.h"
 #include "post/collapse.h"
 
 namespace meniscus {
@@ -50,11 +51,11 @@ void drop_rows(CsrList& list, const std::vector<int32_t>& new_index, int threads
         saved_from[b] = std::min(src_end, std::max(src_begin, dst[b + 1]));
         saved_at[b + 1] = saved_at[b] + (src_end - saved_from[b]);
     }
-    std::vector<int32_t> saved(static_cast<std::size_t>(saved_at[blocks]));
+    UninitializedVector<int32_t> saved(static_cast<std::size_t>(saved_at[blocks]));
     parallel_for(blocks, threads, [&](int64_t b) {
         std::copy(list.items.begin() + saved_from[b], list.items.begin() + list.offsets[block_rows(b).second], saved.begin() + saved_at[b]);
     });
-    std::vector<int64_t> offsets(static_cast<std::size_t>(rows_before[blocks]) + 1);
+    UninitializedVector<int64_t> offsets(static_cast<std::size_t>(rows_before[blocks]) + 1);  // every entry written below
     parallel_for(blocks, threads, [&](int64_t b) {
         int64_t write = dst[b], row = rows_before[b];
         const int64_t end_from_list = saved_from[b], saved_shift = saved_at[b] - saved_from[b];  // source position -> saved
@@ -238,9 +239,10 @@ bool touches_pinned(const MeshAdjacency& adj, const Candidate& cand, const std::
 
 std::vector<Candidate> find_candidates(const MeshAdjacency& adj, int threads, const std::vector<uint8_t>* pinned) {
     const int64_t nv = static_cast<int64_t>(adj.vertex_neighbours.rows());
-    std::vector<int32_t> kind(static_cast<std::size_t>(nv), -2);  // -2 none, -1 single, >= 0 double partner
+    UninitializedVector<int32_t> kind(static_cast<std::size_t>(nv));  // -2 none, -1 single, >= 0 double partner
     parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t v = begin; v < end; ++v) {
+            kind[v] = -2;
             if (is_single_centre(adj, static_cast<int32_t>(v))) {
                 kind[v] = -1;
             } else {
