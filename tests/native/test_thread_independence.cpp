@@ -9,11 +9,14 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "base/compaction.h"
 #include "base/concurrent_disjoint_sets.h"
 #include "base/greedy_selection.h"
+#include "base/parallel_move.h"
+#include "base/uninitialized_vector.h"
 #include "io/io.h"
 #include "mesh/adjacency.h"
 #include "mesh/components.h"
@@ -288,4 +291,40 @@ TEST_CASE("the particle grid is the same at every thread count, sorted by cell a
     positions[3 * 70001] = -1.0e30f;
     for (int threads : {1, 4})
         CHECK_THROWS_WITH(ParticleGrid(view, cell, threads, &keep), Catch::Contains("particle 70001 has a coordinate too large"));
+}
+
+TEST_CASE("overlapping moves in parallel chunks equal memmove, up and down, at any distance", "[threads][move]") {
+    const int64_t chunk = kMoveChunk;
+    for (int64_t count : {int64_t{100}, 3 * chunk + 17, 9 * chunk}) {
+        for (int64_t distance : {int64_t{1}, int64_t{3}, int64_t{299}, chunk - 1, chunk, chunk + 5, 2 * chunk + 1, count + 3}) {
+            for (bool down : {true, false}) {
+                // Room for the move either way; values distinct, so a misplaced element shows.
+                std::vector<int32_t> original(static_cast<std::size_t>(count + distance + 10));
+                for (std::size_t i = 0; i < original.size(); ++i) original[i] = static_cast<int32_t>(i * 7 + 1);
+                const int64_t from = down ? distance + 4 : 4, to = down ? 4 : distance + 4;
+                std::vector<int32_t> expected = original;
+                std::memmove(expected.data() + to, expected.data() + from, static_cast<std::size_t>(count) * sizeof(int32_t));
+                for (int threads : {1, 2, 3, 7}) {
+                    INFO("count " << count << ", distance " << distance << (down ? " down, " : " up, ") << threads << " threads");
+                    std::vector<int32_t> moved = original;
+                    move_in_parallel(moved.data(), from, to, count, threads);
+                    CHECK(moved == expected);
+                }
+            }
+        }
+    }
+}
+
+TEST_CASE("parallel fills and copies write every element", "[threads][move]") {
+    for (int threads : {1, 3}) {
+        UninitializedVector<int64_t> filled;
+        fill_in_parallel(filled, 200003, int64_t{-5}, threads);
+        CHECK(filled.size() == 200003);
+        CHECK(std::all_of(filled.begin(), filled.end(), [](int64_t v) { return v == -5; }));
+        std::vector<int32_t> source(150001);
+        for (std::size_t i = 0; i < source.size(); ++i) source[i] = static_cast<int32_t>(i ^ 0x5a5a);
+        UninitializedVector<int32_t> copied;
+        copy_in_parallel(source.data(), source.size(), copied, threads);
+        CHECK(std::equal(copied.begin(), copied.end(), source.begin(), source.end()));
+    }
 }

@@ -10,6 +10,7 @@
 #include "base/compaction.h"
 #include "base/greedy_selection.h"
 #include "base/parallel.h"
+#include "base/parallel_move.h"
 #include "base/uninitialized_vector.h"
 #include "post/collapse.h"
 
@@ -31,7 +32,7 @@ constexpr int64_t kRowBlock = int64_t{1} << 14;
 // sources), so a block may overwrite the end of an earlier block's source: each block first saves that end (the part
 // below its own and later blocks' destinations is never written by them), then all move at once, reading the saved
 // end where it lies. Within a block the copy runs forwards, writes never ahead of reads.
-void drop_rows(CsrList& list, const std::vector<int32_t>& new_index, int threads) {
+void drop_rows(CsrList& list, const UninitializedVector<int32_t>& new_index, int threads) {
     const int64_t nv = static_cast<int64_t>(list.rows());
     const int64_t blocks = (nv + kRowBlock - 1) / kRowBlock;
     auto block_rows = [&](int64_t b) { return std::make_pair(b * kRowBlock, std::min(nv, (b + 1) * kRowBlock)); };
@@ -77,7 +78,7 @@ void drop_rows(CsrList& list, const std::vector<int32_t>& new_index, int threads
 // Turns the adjacency of the working mesh into the one of the compacted mesh (same triangles, in the same order),
 // in place: rows of removed vertices dropped and neighbour indices renumbered, both in parallel. The renumbering
 // keeps the order, so rows stay sorted. No rebuild, and no second copy of the lists.
-void renumber_adjacency(MeshAdjacency& adjacency, const std::vector<int32_t>& new_index, int threads) {
+void renumber_adjacency(MeshAdjacency& adjacency, const UninitializedVector<int32_t>& new_index, int threads) {
     CsrList& neighbours = adjacency.vertex_neighbours;
     parallel_blocks(static_cast<int64_t>(neighbours.rows()), threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t v = begin; v < end; ++v)
@@ -90,8 +91,9 @@ void renumber_adjacency(MeshAdjacency& adjacency, const std::vector<int32_t>& ne
 
 // Replaces the rows of the claimed vertices (ascending in `touched`) by `fresh` and renumbers the other rows' items
 // through `renumber` (may be null), in place. Between two touched rows every row moves by the same shift, so the
-// rows move as a few long segments; segments moving down go first, in vertex order, then those moving up, in reverse
-// order: neither overwrites a segment not yet moved (their final places are disjoint and keep the order). In place,
+// rows move as a few long segments, each in parallel chunks; segments moving down go first, in vertex order, then
+// those moving up, in reverse order: neither overwrites a segment not yet moved (their final places are disjoint
+// and keep the order). In place,
 // because a copy of both lists is ~160 MB of fresh pages at a million particles, for a pass that touched a few
 // hundred rows.
 void replace_rows(CsrList& list, const std::vector<int32_t>& touched, const std::vector<std::vector<int32_t>>& fresh,
@@ -118,11 +120,7 @@ void replace_rows(CsrList& list, const std::vector<int32_t>& touched, const std:
     }
     const int64_t old_total = list.offsets[nv];
     if (old_total + shift > old_total) list.items.resize(static_cast<std::size_t>(old_total + shift));
-    auto move = [&](const Segment& g) {
-        if (g.shift != 0 && g.old_end > g.old_begin)
-            std::memmove(list.items.data() + g.old_begin + g.shift, list.items.data() + g.old_begin,
-                         static_cast<std::size_t>(g.old_end - g.old_begin) * sizeof(int32_t));
-    };
+    auto move = [&](const Segment& g) { move_in_parallel(list.items.data(), g.old_begin, g.old_begin + g.shift, g.old_end - g.old_begin, threads); };
     for (const Segment& g : segments)
         if (g.shift < 0) move(g);
     for (auto g = segments.rbegin(); g != segments.rend(); ++g)
@@ -143,8 +141,8 @@ void replace_rows(CsrList& list, const std::vector<int32_t>& touched, const std:
 // fans. The same lists as a rebuild.
 void patch_adjacency(MeshAdjacency& adjacency, const CollapseMesh& work, const std::vector<int32_t>& triangles,
                      const std::vector<uint8_t>& claimed, int threads) {
-    const std::vector<uint8_t>& deleted = work.deleted_triangles();
-    std::vector<int32_t> new_id(deleted.size());
+    const UninitializedVector<uint8_t>& deleted = work.deleted_triangles();
+    UninitializedVector<int32_t> new_id(deleted.size());  // every entry numbered below
     number_kept(static_cast<int64_t>(deleted.size()), threads, [&](int64_t t) { return !deleted[t]; }, new_id.data());
     const int64_t nv = static_cast<int64_t>(claimed.size());
     // Claimed vertices: current triangles (new numbers, ascending) and neighbours, from the fans `work` reads in the
@@ -405,7 +403,7 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
         CollapseMesh work(triangles, positions, adj.vertex_triangles, removed, threads);
         const PassOutcome outcome = collapse_selected(adj, selected, work, threads);
         removed_configurations += outcome.removed_configurations;
-        drop_deleted_triangles(triangles, work.deleted_triangles());
+        drop_deleted_triangles(triangles, work.deleted_triangles(), threads);
         changed = changed || outcome.changed;
         if (!outcome.changed) break;
         adjacency_is_current = pass + 1 < kMaxDetectionPasses;  // the last pass's collapses are not patched in
@@ -413,7 +411,7 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
     }
     if (changed) {
         claim = std::vector<int32_t>();
-        const std::vector<int32_t> new_index = compact_into(mesh, triangles, positions, removed, nullptr, threads);
+        const UninitializedVector<int32_t> new_index = compact_into(mesh, triangles, positions, removed, nullptr, threads);
         if (final_adjacency && adjacency_is_current) renumber_adjacency(adj, new_index, threads);
     } else {
         mesh.triangles = std::move(triangles);
