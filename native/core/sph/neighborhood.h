@@ -23,6 +23,9 @@ public:
     std::size_t size() const { return original_index_.size(); }
     double cell_size() const { return cell_size_; }
     std::size_t num_cells() const { return cell_keys_.size(); }
+    // The box of occupied cells: smallest cell coordinates and the number of cells per axis (zero without particles).
+    const std::array<int64_t, 3>& cell_origin() const { return origin_; }
+    const std::array<int64_t, 3>& cell_extent() const { return extent_; }
 
     // Sorted particle j: position and index in the caller's array.
     const float* position(std::size_t j) const { return &positions_[3 * j]; }
