@@ -279,8 +279,8 @@ void closed_two_ring(const MeshAdjacency& adj, const Candidate& cand, std::vecto
 
 // The candidates a greedy pass in candidate order takes (one is taken when no vertex of its closed two-ring was
 // claimed by one taken before it), selected in parallel with the same result; their two-rings get claim[v] = pass.
-std::vector<Candidate> select_disjoint(const MeshAdjacency& adj, const std::vector<Candidate>& candidates, std::vector<int32_t>& claim,
-                                       int32_t pass, std::vector<std::atomic<int32_t>>& lowest, int threads) {
+std::vector<Candidate> select_disjoint(const MeshAdjacency& adj, const std::vector<Candidate>& candidates, UninitializedVector<int32_t>& claim,
+                                       int32_t pass, UninitializedVector<std::atomic<int32_t>>& lowest, int threads) {
     std::vector<std::vector<int32_t>> regions(candidates.size());
     parallel_for(static_cast<int64_t>(candidates.size()), threads, [&](int64_t i) { closed_two_ring(adj, candidates[i], regions[i]); }, 16);
     const std::vector<uint8_t> taken = select_greedy_disjoint(regions, claim, pass, lowest, threads);
@@ -341,7 +341,7 @@ PassOutcome collapse_selected(const MeshAdjacency& adj, const std::vector<Candid
     return outcome;
 }
 
-std::vector<uint8_t> claimed_in(const std::vector<int32_t>& claim, int32_t pass, int threads) {
+std::vector<uint8_t> claimed_in(const UninitializedVector<int32_t>& claim, int32_t pass, int threads) {
     std::vector<uint8_t> claimed(claim.size());
     parallel_blocks(static_cast<int64_t>(claim.size()), threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t v = begin; v < end; ++v) claimed[v] = claim[v] == pass;
@@ -388,8 +388,9 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
     std::vector<int32_t> triangles = std::move(mesh.triangles);
     std::vector<float> positions = std::move(mesh.vertices);
     std::vector<uint8_t> removed(nv, 0);
-    std::vector<int32_t> claim(nv, -1);  // the pass whose selection claimed the vertex
-    std::vector<std::atomic<int32_t>> lowest;  // select_disjoint's scratch, made when there are candidates
+    UninitializedVector<int32_t> claim;  // the pass whose selection claimed the vertex
+    fill_in_parallel(claim, nv, int32_t{-1}, threads);
+    UninitializedVector<std::atomic<int32_t>> lowest;  // select_disjoint's scratch (written before read), made when there are candidates
     std::size_t removed_configurations = 0;
     bool changed = false;
 
@@ -398,7 +399,7 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
     for (int pass = 0; pass < kMaxDetectionPasses; ++pass) {
         const std::vector<Candidate> candidates = find_candidates(adj, threads, pinned);
         if (candidates.empty()) break;
-        if (lowest.empty()) lowest = std::vector<std::atomic<int32_t>>(nv);
+        if (lowest.empty()) lowest = UninitializedVector<std::atomic<int32_t>>(nv);
         const std::vector<Candidate> selected = select_disjoint(adj, candidates, claim, pass, lowest, threads);
         CollapseMesh work(triangles, positions, adj.vertex_triangles, removed, threads);
         const PassOutcome outcome = collapse_selected(adj, selected, work, threads);
@@ -410,7 +411,7 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
         if (adjacency_is_current) patch_adjacency(adj, work, triangles, claimed_in(claim, pass, threads), threads);
     }
     if (changed) {
-        claim = std::vector<int32_t>();
+        claim = UninitializedVector<int32_t>();
         const UninitializedVector<int32_t> new_index = compact_into(mesh, triangles, positions, removed, nullptr, threads);
         if (final_adjacency && adjacency_is_current) renumber_adjacency(adj, new_index, threads);
     } else {
