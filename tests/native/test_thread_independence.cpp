@@ -296,7 +296,7 @@ TEST_CASE("the particle grid is the same at every thread count, sorted by cell a
 TEST_CASE("overlapping moves in parallel chunks equal memmove, up and down, at any distance", "[threads][move]") {
     const int64_t chunk = kMoveChunk;
     for (int64_t count : {int64_t{100}, 3 * chunk + 17, 9 * chunk}) {
-        for (int64_t distance : {int64_t{1}, int64_t{3}, int64_t{299}, chunk - 1, chunk, chunk + 5, 2 * chunk + 1, count + 3}) {
+        for (int64_t distance : {int64_t{1}, int64_t{3}, int64_t{299}, int64_t{5000}, chunk - 1, chunk, chunk + 5, 2 * chunk + 1, count + 3}) {
             for (bool down : {true, false}) {
                 // Room for the move either way; values distinct, so a misplaced element shows.
                 std::vector<int32_t> original(static_cast<std::size_t>(count + distance + 10));

@@ -21,11 +21,13 @@ void move_in_parallel(T* data, int64_t from, int64_t to, int64_t count, int thre
     static_assert(std::is_trivially_copyable<T>::value, "moved with memmove");
     const int64_t distance = to > from ? to - from : from - to;
     if (distance == 0 || count <= 0) return;
-    if (count < 2 * kMoveChunk) {
+    // A chunk's destination reaches at most its neighbour's source (chunk >= distance), and the saved parts, one
+    // distance per chunk, stay within a sixteenth of the moved run: a long shift moves in fewer, longer chunks.
+    const int64_t chunk = std::max(kMoveChunk, 16 * distance);
+    if (count < 2 * chunk) {
         std::memmove(data + to, data + from, static_cast<std::size_t>(count) * sizeof(T));
         return;
     }
-    const int64_t chunk = std::max(kMoveChunk, distance);  // a chunk's destination reaches at most its neighbour
     const int64_t chunks = (count + chunk - 1) / chunk;
     const bool down = to < from;
     // Moving down, chunk c + 1 overwrites the last `distance` source elements of chunk c; moving up, chunk c - 1
@@ -37,7 +39,7 @@ void move_in_parallel(T* data, int64_t from, int64_t to, int64_t count, int thre
         const int64_t length = needed ? std::min(distance, b.second - b.first) : 0;
         return down ? std::make_pair(b.second - length, b.second) : std::make_pair(b.first, b.first + length);
     };
-    std::vector<T> saved(static_cast<std::size_t>(chunks * distance));  // at most count + chunk elements
+    std::vector<T> saved(static_cast<std::size_t>(chunks * distance));
     parallel_for(chunks, threads, [&](int64_t c) {
         const auto s = saved_range(c);
         std::copy(data + from + s.first, data + from + s.second, saved.data() + c * distance);

@@ -21,6 +21,10 @@ template <class T>
 class DefaultInitAllocator {
 public:
     using value_type = T;
+    // Stateless, like std::allocator: a moved vector hands its buffer over (libc++ would otherwise move element by
+    // element, which std::atomic elements cannot).
+    using propagate_on_container_move_assignment = std::true_type;
+    using is_always_equal = std::true_type;
     template <class U>
     struct rebind {
         using other = DefaultInitAllocator<U>;
