@@ -43,10 +43,17 @@ UninitializedVector<int32_t> compact_into(TriMesh& mesh, std::vector<int32_t>& t
     number_kept(nv, threads, [&](int64_t v) { return !removed[v]; }, new_index.data());
     const std::vector<int32_t> survivors = kept_indices(nv, threads, [&](int64_t v) { return !removed[v]; });
     const int64_t ns = static_cast<int64_t>(survivors.size());
-    parallel_blocks(static_cast<int64_t>(triangles.size()), threads, 16 * kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t i = begin; i < end; ++i) triangles[i] = new_index[triangles[i]];
+    // The new vertex array (a std::vector: zero-filled on one thread) is made by one thread while the others
+    // renumber the triangles.
+    std::vector<float> vertices;
+    const int64_t indices = static_cast<int64_t>(triangles.size()), block = 16 * kBlock;
+    parallel_for((indices + block - 1) / block + 1, threads, [&](int64_t item) {
+        if (item == 0) {
+            vertices.resize(3 * static_cast<std::size_t>(ns));
+            return;
+        }
+        for (int64_t i = (item - 1) * block, end = std::min(indices, item * block); i < end; ++i) triangles[i] = new_index[triangles[i]];
     });
-    std::vector<float> vertices(3 * static_cast<std::size_t>(ns));
     parallel_blocks(ns, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t i = begin; i < end; ++i)
             for (int k = 0; k < 3; ++k) vertices[3 * i + k] = positions[3 * static_cast<int64_t>(survivors[i]) + k];
