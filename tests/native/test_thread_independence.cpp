@@ -328,3 +328,19 @@ TEST_CASE("parallel fills and copies write every element", "[threads][move]") {
         CHECK(std::equal(copied.begin(), copied.end(), source.begin(), source.end()));
     }
 }
+
+TEST_CASE("mesh checks name the first index out of range at any thread count", "[threads][validation]") {
+    TriMesh mesh = make_icosphere(5);
+    const std::size_t nv = mesh.num_vertices();
+    REQUIRE(mesh.triangles.size() > 60000);
+    for (int threads : kThreadCounts) CHECK(first_index_out_of_range(mesh.triangles, nv, threads) == mesh.triangles.size());
+    // Two bad indices far apart: the first one is named, whichever thread counts it.
+    mesh.triangles[3 * 9000 + 2] = static_cast<int32_t>(nv);
+    mesh.triangles[3 * 15000] = -4;
+    for (int threads : kThreadCounts) {
+        INFO(threads << " threads");
+        CHECK(first_index_out_of_range(mesh.triangles, nv, threads) == 3 * 9000 + 2);
+        CHECK_THROWS_WITH(validate_mesh_arrays(mesh, "check", threads),
+                          Catch::Contains("triangle 9000 uses vertex index " + std::to_string(nv)));
+    }
+}

@@ -379,7 +379,7 @@ std::size_t count_double_vertex_configurations(const TriMesh& mesh) {
 
 
 std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_adjacency, const std::vector<uint8_t>* pinned) {
-    validate_mesh_arrays(mesh, "decimate_barnacles");
+    validate_mesh_arrays(mesh, "decimate_barnacles", threads);
     if (final_adjacency) *final_adjacency = MeshAdjacency{};
     threads = resolve_threads(threads);
     // The working arrays take the mesh's own (a copy was ~0.1 s of serial page faults at 1 M particles): compact_into
