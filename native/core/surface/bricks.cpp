@@ -286,7 +286,7 @@ TriMesh mesh_bricks(const std::vector<LatticeCoords>& bricks, const BrickSampler
         else mesh.triangles.resize(triangle_offset.back());
     });
     parallel_for(static_cast<int64_t>(pieces.size()), threads, [&](int64_t b) {
-        BrickMesh& piece = pieces[static_cast<std::size_t>(b)];
+        const BrickMesh& piece = pieces[static_cast<std::size_t>(b)];
         std::copy(piece.vertices.begin(), piece.vertices.end(), mesh.vertices.begin() + static_cast<std::ptrdiff_t>(3 * vertex_offset[b]));
         std::vector<int32_t> resolved(piece.foreign.size());
         for (std::size_t f = 0; f < piece.foreign.size(); ++f) {
@@ -304,9 +304,6 @@ TriMesh mesh_bricks(const std::vector<LatticeCoords>& bricks, const BrickSampler
             const int32_t v = piece.triangles[i];
             target[i] = v >= 0 ? static_cast<int32_t>(vertex_offset[b]) + v : resolved[static_cast<std::size_t>(-v - 1)];
         }
-        // Released here, in parallel, rather than all at the end on one thread; other bricks still read the border.
-        std::vector<float>().swap(piece.vertices);
-        std::vector<int32_t>().swap(piece.triangles);
     });
     return mesh;
 }
