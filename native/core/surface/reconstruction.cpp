@@ -21,20 +21,17 @@ bool finite_position(const PositionsView& positions, std::size_t i) {
 
 // Non-finite positions: refused with a count, or dropped when the caller asked for it. Returns the particles to
 // keep (empty: all).
-std::vector<uint8_t> finite_particles(const PositionsView& positions, const ExecutionOptions& execution, int threads, PipelineStats* stats) {
-    const int64_t n = static_cast<int64_t>(positions.count);
-    const std::size_t invalid = parallel_count(n, threads, [&](int64_t i) { return !finite_position(positions, static_cast<std::size_t>(i)); });
+std::vector<uint8_t> finite_particles(const PositionsView& positions, const ExecutionOptions& execution, PipelineStats* stats) {
+    std::size_t invalid = 0, first_invalid = 0;
+    for (std::size_t i = 0; i < positions.count; ++i)
+        if (!finite_position(positions, i) && invalid++ == 0) first_invalid = i;
     if (invalid == 0) return {};
-    std::size_t first_invalid = 0;
-    while (finite_position(positions, first_invalid)) ++first_invalid;
     if (!execution.skip_invalid)
         throw InputError(std::to_string(invalid) + " of " + std::to_string(positions.count) +
                          " particles have NaN or Inf coordinates (the first is particle " + std::to_string(first_invalid) +
                          "); pass skip_invalid (--skip-invalid) to drop them");
     std::vector<uint8_t> keep(positions.count);
-    parallel_blocks(n, threads, int64_t{1} << 16, [&](int64_t begin, int64_t end) {
-        for (int64_t i = begin; i < end; ++i) keep[i] = finite_position(positions, static_cast<std::size_t>(i));
-    });
+    for (std::size_t i = 0; i < positions.count; ++i) keep[i] = finite_position(positions, i);
     if (stats) stats->warnings.push_back("dropped " + std::to_string(invalid) + " particles with NaN or Inf coordinates");
     return keep;
 }
@@ -42,19 +39,19 @@ std::vector<uint8_t> finite_particles(const PositionsView& positions, const Exec
 // Particles outside the container's particle box: dropped, with a count and a warning when none are left. Combines
 // with `keep` (the finite particles; empty: all). Returns the particles to keep (empty: all).
 std::vector<uint8_t> particles_in_box(const PositionsView& positions, std::vector<uint8_t> keep, const ContainerParams* container,
-                                      int threads, PipelineStats* stats) {
+                                      PipelineStats* stats) {
     if (!container || !container->particle_aabb_min || !container->particle_aabb_max) return keep;
     const Vector3& lower = *container->particle_aabb_min;
     const Vector3& upper = *container->particle_aabb_max;
     if (keep.empty()) keep.assign(positions.count, 1);
-    const int64_t n = static_cast<int64_t>(positions.count);
-    const std::size_t outside = parallel_count(n, threads, [&](int64_t i) {  // each particle's flag updated once
-        if (!keep[i]) return false;
+    std::size_t outside = 0, kept = 0;
+    for (std::size_t i = 0; i < positions.count; ++i) {
+        if (!keep[i]) continue;
         const double point[3] = {positions.coord(i, 0), positions.coord(i, 1), positions.coord(i, 2)};
-        keep[i] = inside_box(point, lower, upper);
-        return !keep[i];
-    });
-    const std::size_t kept = parallel_count(n, threads, [&](int64_t i) { return keep[i] != 0; });
+        const bool inside = inside_box(point, lower, upper);
+        keep[i] = inside;
+        inside ? ++kept : ++outside;
+    }
     if (stats) {
         stats->set_count("particles_outside_box", static_cast<double>(outside));
         if (kept == 0 && outside > 0)
@@ -90,7 +87,7 @@ SurfaceReconstruction reconstruct_surface(const PositionsView& positions, const 
                                           const ExecutionOptions& execution, PipelineStats* stats, const ContainerParams* container) {
     validate(params);
     const int threads = resolve_threads(execution.threads);
-    const std::vector<uint8_t> keep = particles_in_box(positions, finite_particles(positions, execution, threads, stats), container, threads, stats);
+    const std::vector<uint8_t> keep = particles_in_box(positions, finite_particles(positions, execution, stats), container, stats);
     const double support = params.compact_support();
     const double cube = params.cube_edge();
 
