@@ -94,15 +94,29 @@ CsrList owned_vertex_triangles(const TriMesh& mesh, int threads) {
     exclusive_scan_in_place(list.offsets, threads);
     list.items.resize(static_cast<std::size_t>(list.offsets.back()));
     int32_t* items = list.items.data();
-    parallel_for(threads, threads, [&](int64_t r) {
+    int64_t* starts = list.offsets.data();
+    parallel_for(threads, threads, [&](int64_t r) {  // each row's start serves as its cursor (no copy of the starts)
         const int64_t first = owned(r).first, span = owned(r).second - first;
-        std::vector<int64_t> cursor(list.offsets.begin() + first, list.offsets.begin() + first + span);
         for (int64_t t = 0; t < nt; ++t) {
             const int32_t id = static_cast<int32_t>(t);
             for_distinct_corners(tris + 3 * t, [&](int32_t v) {
-                if (static_cast<uint64_t>(v - first) < static_cast<uint64_t>(span)) items[cursor[v - first]++] = id;
+                if (static_cast<uint64_t>(v - first) < static_cast<uint64_t>(span)) items[starts[v]++] = id;
             });
         }
+    });
+    // Every row start now holds the next row's: moved back by one row, a range's first row taking the value its
+    // predecessor's last row holds (row 0 starts at 0).
+    std::vector<int64_t> range_start(static_cast<std::size_t>(threads));
+    int64_t carry = 0;
+    for (int r = 0; r < threads; ++r) {
+        range_start[static_cast<std::size_t>(r)] = carry;
+        if (owned(r).second > owned(r).first) carry = starts[owned(r).second - 1];
+    }
+    parallel_for(threads, threads, [&](int64_t r) {
+        const int64_t first = owned(r).first, last = owned(r).second;
+        if (last == first) return;
+        for (int64_t v = last - 1; v > first; --v) starts[v] = starts[v - 1];
+        starts[first] = range_start[static_cast<std::size_t>(r)];
     });
     return list;
 }

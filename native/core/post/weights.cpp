@@ -149,12 +149,12 @@ float kth_smallest(const std::vector<float>& values, std::size_t k, int threads,
     const std::size_t buckets = std::size_t{1} << kBucketBits;
     auto bucket_of = [](float v) { return order_key(v) >> (32 - kBucketBits); };
     // Per block: counts per bucket, and per group of 256 buckets, so that the search reads few counts.
-    std::vector<std::vector<uint32_t>> block_counts(static_cast<std::size_t>(blocks)), group_counts(static_cast<std::size_t>(blocks));
+    // (Made here rather than by the worker threads, whose allocations would land in their own malloc arenas.)
+    std::vector<std::vector<uint32_t>> block_counts(static_cast<std::size_t>(blocks), std::vector<uint32_t>(buckets)),
+        group_counts(static_cast<std::size_t>(blocks), std::vector<uint32_t>(buckets >> 8));
     parallel_for(blocks, threads, [&](int64_t b) {
         std::vector<uint32_t>& count = block_counts[static_cast<std::size_t>(b)];
         std::vector<uint32_t>& group = group_counts[static_cast<std::size_t>(b)];
-        count.assign(buckets, 0);
-        group.assign(buckets >> 8, 0);
         for (int64_t i = b * kSelectBlock, end = std::min(n, i + kSelectBlock); i < end; ++i)
             if (take(values[i])) {
                 const uint32_t bucket = bucket_of(values[i]);
