@@ -97,7 +97,7 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
     if ((post.smoothing_iterations > 0 && post.smoothing_weights) || post.output_weights) {
         StageTimer timer(&stats, "weights");
         const std::vector<float>& counts = reconstruction.densities.neighbor_counts;
-        result.weights_normalization = halfspace_normalization(counts, surface.iso_threshold, post.weights_normalization);
+        result.weights_normalization = halfspace_normalization(counts, surface.iso_threshold, post.weights_normalization, threads);
         // N_HS from the particles as they are; the counts the weights read, mirrored at the walls (post/container.h).
         const std::vector<float> mirrored = walls.empty() ? std::vector<float>{}
                                                           : counts_mirrored_at_walls(reconstruction.grid, counts, *container.mesh_aabb_min,

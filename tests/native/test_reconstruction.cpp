@@ -2,7 +2,9 @@
 // determinism, memory that follows the fluid, refusals of bad input.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -12,6 +14,7 @@
 #include "mesh/topology.h"
 #include "mesh_builders.h"
 #include "pipeline.h"
+#include "surface/level_set.h"
 #include "surface/reconstruction.h"
 
 using namespace meniscus;
@@ -141,4 +144,43 @@ TEST_CASE("bad input is refused with a message naming it", "[reconstruction][err
     // Zero particles: an empty mesh, not an error.
     const auto empty = reconstruct_surface(PositionsView(one, 0), reconstruction_params(0.025, 0.5), {});
     CHECK(empty.mesh.num_triangles() == 0);
+}
+
+TEST_CASE("the bricks near particles: every brick a cell's particles reach, sorted, once; dense and sparse frames", "[reconstruction][threads]") {
+    const double support = 0.1, cube = 0.0125;
+    // Their definition: the bricks of lattice cubes within support + one cube of each occupied cell.
+    auto expected_bricks = [&](const ParticleGrid& grid) {
+        std::set<LatticeCoords, bool (*)(const LatticeCoords&, const LatticeCoords&)> bricks(coords_less);
+        const double cell = grid.cell_size(), margin = support + cube;
+        for (std::size_t c = 0; c < grid.num_cells(); ++c) {
+            const auto coords = grid.cell_coords(c);
+            LatticeCoords lo, hi;
+            for (int k = 0; k < 3; ++k) {
+                lo[k] = floor_div(static_cast<int64_t>(std::floor((double(coords[k]) * cell - margin) / cube)), kBrick);
+                hi[k] = floor_div(static_cast<int64_t>(std::ceil((double(coords[k] + 1) * cell + margin) / cube)), kBrick);
+            }
+            for (int64_t z = lo[2]; z <= hi[2]; ++z)
+                for (int64_t y = lo[1]; y <= hi[1]; ++y)
+                    for (int64_t x = lo[0]; x <= hi[0]; ++x) bricks.insert({x, y, z});
+        }
+        return std::vector<LatticeCoords>(bricks.begin(), bricks.end());
+    };
+    // A compact block with negative coordinates (flags over the bricks' box), then the same with two droplets far
+    // apart along a diagonal (a box far too sparse to flag: the bricks are listed and sorted).
+    std::vector<float> positions;
+    for (int i = 0; i < 40; ++i)
+        for (int j = 0; j < 30; ++j)
+            for (int k = 0; k < 20; ++k)
+                for (float x : {-0.6f + 0.025f * i, -0.3f + 0.025f * j, 0.1f + 0.025f * k}) positions.push_back(x);
+    for (bool sparse : {false, true}) {
+        if (sparse)
+            for (float x : {900.0f, -700.0f, 650.0f, -800.0f, 750.0f, -900.0f}) positions.push_back(x);
+        const ParticleGrid grid(PositionsView(positions.data(), positions.size() / 3), support, 2);
+        const std::vector<LatticeCoords> expected = expected_bricks(grid);
+        REQUIRE(expected.size() > 8);
+        for (int threads : {1, 2, 3, 7}) {
+            INFO((sparse ? "sparse, " : "dense, ") << threads << " threads");
+            CHECK(bricks_near_particles(grid, support, cube, threads) == expected);
+        }
+    }
 }

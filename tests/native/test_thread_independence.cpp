@@ -9,11 +9,14 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "base/compaction.h"
 #include "base/concurrent_disjoint_sets.h"
 #include "base/greedy_selection.h"
+#include "base/parallel_move.h"
+#include "base/uninitialized_vector.h"
 #include "io/io.h"
 #include "mesh/adjacency.h"
 #include "mesh/components.h"
@@ -96,7 +99,7 @@ TEST_CASE("adjacency rows over several scan blocks hold each vertex's own triang
         }
     std::sort(edges.begin(), edges.end());
     edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-    std::vector<int32_t> expected_neighbours;
+    UninitializedVector<int32_t> expected_neighbours;
     std::vector<int64_t> neighbours_of(mesh.num_vertices(), 0);
     for (const auto& e : edges) expected_neighbours.push_back(e.second), ++neighbours_of[e.first];
     for (int threads : kThreadCounts) {
@@ -255,7 +258,7 @@ TEST_CASE("the particle grid is the same at every thread count, sorted by cell a
         for (int k = 0; k < 3; ++k) c[k] = static_cast<int64_t>(std::floor(double(positions[3 * i + k]) / cell));
         return std::array<int64_t, 3>{c[2], c[1], c[0]};
     };
-    std::vector<uint32_t> expected;
+    UninitializedVector<uint32_t> expected;
     for (uint32_t i = 0; i < n; ++i)
         if (keep[i]) expected.push_back(i);
     std::stable_sort(expected.begin(), expected.end(), [&](uint32_t a, uint32_t b) { return cell_of(a) < cell_of(b); });
@@ -288,4 +291,56 @@ TEST_CASE("the particle grid is the same at every thread count, sorted by cell a
     positions[3 * 70001] = -1.0e30f;
     for (int threads : {1, 4})
         CHECK_THROWS_WITH(ParticleGrid(view, cell, threads, &keep), Catch::Contains("particle 70001 has a coordinate too large"));
+}
+
+TEST_CASE("overlapping moves in parallel chunks equal memmove, up and down, at any distance", "[threads][move]") {
+    const int64_t chunk = kMoveChunk;
+    for (int64_t count : {int64_t{100}, 3 * chunk + 17, 9 * chunk}) {
+        for (int64_t distance : {int64_t{1}, int64_t{3}, int64_t{299}, int64_t{5000}, chunk - 1, chunk, chunk + 5, 2 * chunk + 1, count + 3}) {
+            for (bool down : {true, false}) {
+                // Room for the move either way; values distinct, so a misplaced element shows.
+                std::vector<int32_t> original(static_cast<std::size_t>(count + distance + 10));
+                for (std::size_t i = 0; i < original.size(); ++i) original[i] = static_cast<int32_t>(i * 7 + 1);
+                const int64_t from = down ? distance + 4 : 4, to = down ? 4 : distance + 4;
+                std::vector<int32_t> expected = original;
+                std::memmove(expected.data() + to, expected.data() + from, static_cast<std::size_t>(count) * sizeof(int32_t));
+                for (int threads : {1, 2, 3, 7}) {
+                    INFO("count " << count << ", distance " << distance << (down ? " down, " : " up, ") << threads << " threads");
+                    std::vector<int32_t> moved = original;
+                    move_in_parallel(moved.data(), from, to, count, threads);
+                    CHECK(moved == expected);
+                }
+            }
+        }
+    }
+}
+
+TEST_CASE("parallel fills and copies write every element", "[threads][move]") {
+    for (int threads : {1, 3}) {
+        UninitializedVector<int64_t> filled;
+        fill_in_parallel(filled, 200003, int64_t{-5}, threads);
+        CHECK(filled.size() == 200003);
+        CHECK(std::all_of(filled.begin(), filled.end(), [](int64_t v) { return v == -5; }));
+        std::vector<int32_t> source(150001);
+        for (std::size_t i = 0; i < source.size(); ++i) source[i] = static_cast<int32_t>(i ^ 0x5a5a);
+        UninitializedVector<int32_t> copied;
+        copy_in_parallel(source.data(), source.size(), copied, threads);
+        CHECK(std::equal(copied.begin(), copied.end(), source.begin(), source.end()));
+    }
+}
+
+TEST_CASE("mesh checks name the first index out of range at any thread count", "[threads][validation]") {
+    TriMesh mesh = make_icosphere(5);
+    const std::size_t nv = mesh.num_vertices();
+    REQUIRE(mesh.triangles.size() > 60000);
+    for (int threads : kThreadCounts) CHECK(first_index_out_of_range(mesh.triangles, nv, threads) == mesh.triangles.size());
+    // Two bad indices far apart: the first one is named, whichever thread counts it.
+    mesh.triangles[3 * 9000 + 2] = static_cast<int32_t>(nv);
+    mesh.triangles[3 * 15000] = -4;
+    for (int threads : kThreadCounts) {
+        INFO(threads << " threads");
+        CHECK(first_index_out_of_range(mesh.triangles, nv, threads) == 3 * 9000 + 2);
+        CHECK_THROWS_WITH(validate_mesh_arrays(mesh, "check", threads),
+                          Catch::Contains("triangle 9000 uses vertex index " + std::to_string(nv)));
+    }
 }

@@ -93,13 +93,13 @@ TEST_CASE("automatic N_HS on the usual 2r lattice lies in a sane range", "[weigh
     const Particles p(particle_block(20, 20, 20, 2 * radius), support, 2);
     // Deep inside, the hat-weighted count on this lattice is 6 (1 - 1/2) + 12 (1 - sqrt(2)/2) + 8 (1 - sqrt(3)/2).
     const double lattice_count = 3.0 + 12.0 * (1.0 - std::sqrt(0.5)) + 8.0 * (1.0 - std::sqrt(0.75));
-    CHECK(bulk_neighbor_count(p.densities.neighbor_counts) == Approx(lattice_count).epsilon(1e-4));
-    const double automatic = halfspace_normalization(p.densities.neighbor_counts, 0.6, 0.0);
+    CHECK(bulk_neighbor_count(p.densities.neighbor_counts, 2) == Approx(lattice_count).epsilon(1e-4));
+    const double automatic = halfspace_normalization(p.densities.neighbor_counts, 0.6, 0.0, 2);
     CHECK(automatic == Approx(flat_surface_count_ratio(0.6) * lattice_count).epsilon(1e-4));
     CHECK(automatic > 4.0);
     CHECK(automatic < 6.0);  // splashsurf's fixed 13 assumes another count; this one follows the frame
-    CHECK(halfspace_normalization(p.densities.neighbor_counts, 0.6, 13.0) == 13.0);  // a given value is taken as it is
-    CHECK(halfspace_normalization({}, 0.6, 0.0) == 1.0);                          // no particles: any positive value
+    CHECK(halfspace_normalization(p.densities.neighbor_counts, 0.6, 13.0, 2) == 13.0);  // a given value is taken as it is
+    CHECK(halfspace_normalization({}, 0.6, 0.0, 2) == 1.0);                          // no particles: any positive value
 }
 
 TEST_CASE("weights: 1 deep in the fluid, 0 on an isolated droplet, smoothstep on and off", "[weights]") {
@@ -108,7 +108,7 @@ TEST_CASE("weights: 1 deep in the fluid, 0 on an isolated droplet, smoothstep on
     const float droplet[3] = {5.0f, 5.0f, 5.0f};
     positions.insert(positions.end(), droplet, droplet + 3);
     const Particles p(positions, support, 2);
-    const double n_hs = halfspace_normalization(p.densities.neighbor_counts, 0.6, 0.0);
+    const double n_hs = halfspace_normalization(p.densities.neighbor_counts, 0.6, 0.0, 2);
     const std::vector<float> points = {0.4f, 0.4f, -0.4f,                          // centre of the block
                                        droplet[0], droplet[1], droplet[2] + 0.01f,  // next to the droplet
                                        0.4f, 0.4f, 2.0f};                          // far from every particle
@@ -120,7 +120,7 @@ TEST_CASE("weights: 1 deep in the fluid, 0 on an isolated droplet, smoothstep on
     }
     // Inside (0, 1) the smoothstep (Eq. 9) of the clamped ratio (Eq. 8): N_HS four times the bulk count.
     const std::vector<float> centre(points.begin(), points.begin() + 3);
-    const double large = 4.0 * bulk_neighbor_count(p.densities.neighbor_counts);
+    const double large = 4.0 * bulk_neighbor_count(p.densities.neighbor_counts, 2);
     const float linear = feature_weights(p.field(), p.densities.neighbor_counts, centre, large, false, 1)[0];
     const float stepped = feature_weights(p.field(), p.densities.neighbor_counts, centre, large, true, 1)[0];
     CHECK(linear == Approx(0.25).epsilon(0.02));
@@ -133,7 +133,7 @@ TEST_CASE("weights are the same, bit for bit, for 1 and 2 threads", "[weights]")
     const PositionsView positions(frame.positions.data(), frame.size());
     const SurfaceReconstruction r = reconstruct_surface(positions, reconstruction_params(0.025, 0.75), {});
     const std::vector<float>& counts = r.densities.neighbor_counts;
-    const double n_hs = halfspace_normalization(counts, 0.6, 0.0);
+    const double n_hs = halfspace_normalization(counts, 0.6, 0.0, 2);
     const std::vector<float> one = feature_weights(r.sph_field(), counts, r.mesh.vertices, n_hs, true, 1);
     const std::vector<float> two = feature_weights(r.sph_field(), counts, r.mesh.vertices, n_hs, true, 2);
     REQUIRE(one.size() == r.mesh.num_vertices());
@@ -145,4 +145,38 @@ TEST_CASE("weights are the same, bit for bit, for 1 and 2 threads", "[weights]")
         inside += w > 0.0f && w < 1.0f;
     }
     CHECK(inside > 0);  // the frame has splashes as well as flat regions
+}
+
+TEST_CASE("the bulk count is the serial nth_element statistic at any thread count", "[weights][threads]") {
+    // The statistic as first written: a copy partitioned at the 95th percentile, then the median of the values
+    // within 25 % of it.
+    auto serial = [](const std::vector<float>& values) {
+        std::vector<float> counts = values;
+        const std::size_t p95 = static_cast<std::size_t>(0.95 * double(counts.size() - 1));
+        std::nth_element(counts.begin(), counts.begin() + static_cast<std::ptrdiff_t>(p95), counts.end());
+        const float high = counts[p95];
+        std::vector<float> bulk;
+        for (float c : values)
+            if (c >= 0.75f * high) bulk.push_back(c);
+        std::nth_element(bulk.begin(), bulk.begin() + static_cast<std::ptrdiff_t>(bulk.size() / 2), bulk.end());
+        return double(bulk[bulk.size() / 2]);
+    };
+    // Several selection blocks; many ties (counts on a coarse grid) and a spread of magnitudes (spray near 0, a few
+    // over-packed outliers), so that the 95th percentile and the median fall inside crowded buckets.
+    std::vector<float> counts(300007);
+    uint32_t state = 12345;
+    for (std::size_t i = 0; i < counts.size(); ++i) {
+        state = state * 1664525u + 1013904223u;
+        const uint32_t r = state >> 8;
+        counts[i] = i % 10 == 0 ? float(r % 1000) * 1e-3f : i % 997 == 0 ? 200.0f + float(r % 50) : 20.0f + float(r % 64) * 0.25f;
+    }
+    const double expected = serial(counts);
+    for (int threads : {1, 2, 3, 7}) {
+        INFO(threads << " threads");
+        CHECK(bulk_neighbor_count(counts, threads) == expected);
+    }
+    const std::vector<float> single{3.5f};
+    CHECK(bulk_neighbor_count(single, 2) == 3.5);
+    const std::vector<float> equal(1000, 7.25f);
+    CHECK(bulk_neighbor_count(equal, 3) == 7.25);
 }

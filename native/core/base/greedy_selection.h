@@ -16,9 +16,11 @@ namespace meniscus {
 // undecided region meeting a taken one is dropped, as the serial pass drops it. Each round decides at least the
 // smallest undecided region; on meshes the chains of conflicts are short, so there are few rounds. The taken
 // regions' vertices get claim[v] = mark (no vertex may hold `mark` before); `lowest` (claim.size() entries) is
-// scratch. Returns taken[i] for every region.
-inline std::vector<uint8_t> select_greedy_disjoint(const std::vector<std::vector<int32_t>>& regions, std::vector<int32_t>& claim, int32_t mark,
-                                                   std::vector<std::atomic<int32_t>>& lowest, int threads) {
+// scratch, written before it is read (so it need not be initialised). Returns taken[i] for every region. Claims and
+// Lowest: any vectors of int32_t and of std::atomic<int32_t> (with any allocator).
+template <class Claims, class Lowest>
+std::vector<uint8_t> select_greedy_disjoint(const std::vector<std::vector<int32_t>>& regions, Claims& claim, int32_t mark, Lowest& lowest,
+                                            int threads) {
     enum : uint8_t { kUndecided, kTaken, kDropped };
     std::vector<uint8_t> state(regions.size(), kUndecided);
     std::vector<int32_t> undecided(regions.size());

@@ -228,7 +228,7 @@ Writer writer_for(const std::string& path, const char* what, std::initializer_li
 void write_mesh(const TriMesh& mesh, const std::string& path, int threads) {
     const MeshWriter write = writer_for<MeshWriter>(
         path, "mesh", {{".ply", io_detail::write_ply_mesh}, {".obj", io_detail::write_obj_mesh}, {".vtk", io_detail::write_vtk_mesh}});
-    io_detail::validate_mesh(mesh, path);
+    io_detail::validate_mesh(mesh, path, threads);
     write(mesh, path, threads);
 }
 

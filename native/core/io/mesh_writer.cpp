@@ -75,7 +75,7 @@ void FileWriter::make_room(std::size_t n) {
 
 void Encoder::make_room(std::size_t n) { buffer_.resize(std::max({2 * buffer_.size(), used_ + n, std::size_t{4096}})); }
 
-void validate_mesh(const TriMesh& mesh, const std::string& path) {
+void validate_mesh(const TriMesh& mesh, const std::string& path, int threads) {
     auto bad = [&](const std::string& what) { throw InputError("cannot write mesh to " + path + ": " + what); };
     if (mesh.vertices.size() % 3 != 0) bad("vertices has " + std::to_string(mesh.vertices.size()) + " floats, not a multiple of 3");
     if (mesh.triangles.size() % 3 != 0)
@@ -89,10 +89,9 @@ void validate_mesh(const TriMesh& mesh, const std::string& path) {
                 std::to_string(a.components) + " components for " + std::to_string(nv) + " vertices");
     if (mesh.quads.size() % 4 != 0) bad("quads has " + std::to_string(mesh.quads.size()) + " indices, not a multiple of 4");
     for (const auto& [faces, corners, kind] : {std::tuple(&mesh.triangles, 3, "triangle"), std::tuple(&mesh.quads, 4, "quad")})
-        for (std::size_t i = 0; i < faces->size(); ++i)
-            if ((*faces)[i] < 0 || static_cast<std::size_t>((*faces)[i]) >= nv)
-                bad(std::string(kind) + " " + std::to_string(i / corners) + " refers to vertex " + std::to_string((*faces)[i]) +
-                    " but there are " + std::to_string(nv) + " vertices");
+        if (const std::size_t i = first_index_out_of_range(*faces, nv, threads); i < faces->size())
+            bad(std::string(kind) + " " + std::to_string(i / corners) + " refers to vertex " + std::to_string((*faces)[i]) +
+                " but there are " + std::to_string(nv) + " vertices");
 }
 
 

@@ -111,7 +111,7 @@ void FileWriter::put_in_parallel(int64_t n, int threads, Encode&& encode) {
 }
 
 // An InputError naming the path when the mesh's arrays disagree (sizes, attribute counts, triangle indices).
-void validate_mesh(const TriMesh& mesh, const std::string& path);
+void validate_mesh(const TriMesh& mesh, const std::string& path, int threads);
 
 // A name safe for a whitespace-separated header (PLY property, VTK array): white space and control characters become
 // '_', an empty name becomes attribute_<index>.

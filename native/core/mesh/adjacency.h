@@ -8,14 +8,16 @@
 #include <string>
 #include <vector>
 
+#include "base/uninitialized_vector.h"
 #include "mesh/mesh.h"
 
 namespace meniscus {
 
-// Row r holds items[offsets[r] .. offsets[r + 1]).
+// Row r holds items[offsets[r] .. offsets[r + 1]). The arrays leave resized elements unwritten (every builder fills
+// them completely, in parallel: base/uninitialized_vector.h).
 struct CsrList {
-    std::vector<int64_t> offsets{0};
-    std::vector<int32_t> items;
+    UninitializedVector<int64_t> offsets{0};
+    UninitializedVector<int32_t> items;
 
     std::size_t rows() const { return offsets.size() - 1; }
     int64_t begin(std::size_t r) const { return offsets[r]; }

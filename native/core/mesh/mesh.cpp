@@ -4,10 +4,20 @@
 #include <limits>
 
 #include "base/errors.h"
+#include "base/parallel.h"
 
 namespace meniscus {
 
-void validate_mesh_arrays(const TriMesh& mesh, const std::string& where) {
+std::size_t first_index_out_of_range(const std::vector<int32_t>& indices, std::size_t vertex_count, int threads) {
+    auto outside = [&](std::size_t i) { return indices[i] < 0 || static_cast<std::size_t>(indices[i]) >= vertex_count; };
+    const std::size_t count = parallel_count(static_cast<int64_t>(indices.size()), threads, [&](int64_t i) { return outside(static_cast<std::size_t>(i)); });
+    if (count == 0) return indices.size();
+    std::size_t first = 0;
+    while (!outside(first)) ++first;
+    return first;
+}
+
+void validate_mesh_arrays(const TriMesh& mesh, const std::string& where, int threads) {
     if (mesh.vertices.size() % 3 != 0)
         throw InputError(where + ": vertices must hold 3 floats per vertex, got " + std::to_string(mesh.vertices.size()));
     if (mesh.triangles.size() % 3 != 0)
@@ -16,12 +26,10 @@ void validate_mesh_arrays(const TriMesh& mesh, const std::string& where) {
     const std::size_t nv = mesh.num_vertices();
     if (nv > static_cast<std::size_t>(std::numeric_limits<int32_t>::max()))
         throw InputError(where + ": too many vertices for 32-bit indices (" + std::to_string(nv) + ")");
-    const int32_t* t = mesh.triangles.data();
-    const std::size_t n = mesh.triangles.size();
-    for (std::size_t i = 0; i < n; ++i)
-        if (t[i] < 0 || static_cast<std::size_t>(t[i]) >= nv)
-            throw InputError(where + ": triangle " + std::to_string(i / 3) + " uses vertex index " + std::to_string(t[i]) +
-                             " but the mesh has " + std::to_string(nv) + " vertices");
+    const std::size_t i = first_index_out_of_range(mesh.triangles, nv, threads);
+    if (i < mesh.triangles.size())
+        throw InputError(where + ": triangle " + std::to_string(i / 3) + " uses vertex index " + std::to_string(mesh.triangles[i]) +
+                         " but the mesh has " + std::to_string(nv) + " vertices");
     if (!mesh.normals.empty() && mesh.normals.size() != mesh.vertices.size())
         throw InputError(where + ": normals must be empty or 3 floats per vertex, got " + std::to_string(mesh.normals.size()) +
                          " for " + std::to_string(nv) + " vertices");

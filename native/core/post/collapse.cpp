@@ -2,6 +2,7 @@
 
 #include "base/compaction.h"
 #include "base/parallel.h"
+#include "base/parallel_move.h"
 
 namespace meniscus {
 
@@ -21,27 +22,38 @@ MeshAdjacency working_adjacency(std::vector<int32_t>& triangles, std::vector<flo
     return adjacency;
 }
 
-void drop_deleted_triangles(std::vector<int32_t>& triangles, const std::vector<uint8_t>& deleted) {
-    std::size_t out = 0;
-    for (std::size_t t = 0; t < deleted.size(); ++t) {
-        if (deleted[t]) continue;
-        for (int k = 0; k < 3; ++k) triangles[3 * out + k] = triangles[3 * t + k];
-        ++out;
+void drop_deleted_triangles(std::vector<int32_t>& triangles, const UninitializedVector<uint8_t>& deleted, int threads) {
+    const int64_t nt = static_cast<int64_t>(deleted.size());
+    const std::vector<int32_t> gone = kept_indices(nt, threads, [&](int64_t t) { return deleted[t] != 0; });
+    // The kept triangles between two deleted ones move down by as many triangles as were deleted before them; the
+    // runs in ascending order, as a serial sweep moves them, each run in parallel (a pass deletes a few triangles
+    // of millions: the runs are long).
+    for (std::size_t i = 0; i < gone.size(); ++i) {
+        const int64_t first = gone[i] + 1, last = i + 1 < gone.size() ? gone[i + 1] : nt;
+        const int64_t before = static_cast<int64_t>(i) + 1;
+        move_in_parallel(triangles.data(), 3 * first, 3 * (first - before), 3 * (last - first), threads);
     }
-    triangles.resize(3 * out);
+    triangles.resize(3 * static_cast<std::size_t>(nt - static_cast<int64_t>(gone.size())));
 }
 
-std::vector<int32_t> compact_into(TriMesh& mesh, std::vector<int32_t>& triangles, const std::vector<float>& positions,
-                                  const std::vector<uint8_t>& removed, const std::vector<int32_t>* group_next, int threads) {
+UninitializedVector<int32_t> compact_into(TriMesh& mesh, std::vector<int32_t>& triangles, const std::vector<float>& positions,
+                                          const std::vector<uint8_t>& removed, const UninitializedVector<int32_t>* group_next, int threads) {
     const int64_t nv = static_cast<int64_t>(removed.size());
-    std::vector<int32_t> new_index(static_cast<std::size_t>(nv));
+    UninitializedVector<int32_t> new_index(static_cast<std::size_t>(nv));  // every entry numbered below
     number_kept(nv, threads, [&](int64_t v) { return !removed[v]; }, new_index.data());
     const std::vector<int32_t> survivors = kept_indices(nv, threads, [&](int64_t v) { return !removed[v]; });
     const int64_t ns = static_cast<int64_t>(survivors.size());
-    parallel_blocks(static_cast<int64_t>(triangles.size()), threads, 16 * kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t i = begin; i < end; ++i) triangles[i] = new_index[triangles[i]];
+    // The new vertex array (a std::vector: zero-filled on one thread) is made by one thread while the others
+    // renumber the triangles.
+    std::vector<float> vertices;
+    const int64_t indices = static_cast<int64_t>(triangles.size()), block = 16 * kBlock;
+    parallel_for((indices + block - 1) / block + 1, threads, [&](int64_t item) {
+        if (item == 0) {
+            vertices.resize(3 * static_cast<std::size_t>(ns));
+            return;
+        }
+        for (int64_t i = (item - 1) * block, end = std::min(indices, item * block); i < end; ++i) triangles[i] = new_index[triangles[i]];
     });
-    std::vector<float> vertices(3 * static_cast<std::size_t>(ns));
     parallel_blocks(ns, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t i = begin; i < end; ++i)
             for (int k = 0; k < 3; ++k) vertices[3 * i + k] = positions[3 * static_cast<int64_t>(survivors[i]) + k];

@@ -19,6 +19,7 @@
 
 #include "base/parallel.h"
 #include "base/short_sort.h"
+#include "base/uninitialized_vector.h"
 #include "mesh/adjacency.h"
 #include "mesh/geometry.h"
 #include "mesh/mesh.h"
@@ -44,7 +45,7 @@ public:
                  int threads = 1)
         : tris_(triangles), pos_(positions), vt_(vt), removed_(removed) {
         const int64_t nv = static_cast<int64_t>(positions.size() / 3);
-        deleted_.assign(triangles.size() / 3, 0);
+        fill_in_parallel(deleted_, triangles.size() / 3, uint8_t{0}, threads);
         next_.resize(static_cast<std::size_t>(nv));
         tail_.resize(static_cast<std::size_t>(nv));
         parallel_blocks(nv, threads, 1 << 14, [&](int64_t begin, int64_t end) {
@@ -52,9 +53,9 @@ public:
         });
     }
 
-    const std::vector<uint8_t>& deleted_triangles() const { return deleted_; }
+    const UninitializedVector<uint8_t>& deleted_triangles() const { return deleted_; }
     // Per vertex, the next vertex merged into the same survivor (-1: last), starting from the survivor itself.
-    const std::vector<int32_t>& group_next() const { return next_; }
+    const UninitializedVector<int32_t>& group_next() const { return next_; }
 
     // Current triangles around v.
     void fan(int32_t v, std::vector<int32_t>& out) const {
@@ -224,21 +225,22 @@ private:
     std::vector<float>& pos_;
     const CsrList& vt_;
     std::vector<uint8_t>& removed_;
-    std::vector<uint8_t> deleted_;
-    std::vector<int32_t> next_, tail_;  // group lists: vertices merged into a vertex, in merge order
+    // Filled in parallel (a pass's arrays are ~25 MB at a million particles).
+    UninitializedVector<uint8_t> deleted_;
+    UninitializedVector<int32_t> next_, tail_;  // group lists: vertices merged into a vertex, in merge order
 };
 
 // The adjacency of working arrays (removed vertices simply have no triangles), built without copying them.
 MeshAdjacency working_adjacency(std::vector<int32_t>& triangles, std::vector<float>& positions, int threads);
 
 // Drops deleted triangles from the working triangle array.
-void drop_deleted_triangles(std::vector<int32_t>& triangles, const std::vector<uint8_t>& deleted);
+void drop_deleted_triangles(std::vector<int32_t>& triangles, const UninitializedVector<uint8_t>& deleted, int threads);
 
 // Writes the working arrays back into mesh without the removed vertices. With group lists (cleanup), every
 // surviving vertex's normal and attributes become the mean over the original vertices merged into it, like its
 // position; without them (barnacles: the centre stays where it is) the survivor keeps its own values.
 // Returns the new index of every old vertex (-1: removed).
-std::vector<int32_t> compact_into(TriMesh& mesh, std::vector<int32_t>& triangles, const std::vector<float>& positions,
-                                  const std::vector<uint8_t>& removed, const std::vector<int32_t>* group_next, int threads);
+UninitializedVector<int32_t> compact_into(TriMesh& mesh, std::vector<int32_t>& triangles, const std::vector<float>& positions,
+                                          const std::vector<uint8_t>& removed, const UninitializedVector<int32_t>* group_next, int threads);
 
 }  // namespace meniscus

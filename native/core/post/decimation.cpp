@@ -10,6 +10,8 @@
 #include "base/compaction.h"
 #include "base/greedy_selection.h"
 #include "base/parallel.h"
+#include "base/parallel_move.h"
+#include "base/uninitialized_vector.h"
 #include "post/collapse.h"
 
 namespace meniscus {
@@ -30,7 +32,7 @@ constexpr int64_t kRowBlock = int64_t{1} << 14;
 // sources), so a block may overwrite the end of an earlier block's source: each block first saves that end (the part
 // below its own and later blocks' destinations is never written by them), then all move at once, reading the saved
 // end where it lies. Within a block the copy runs forwards, writes never ahead of reads.
-void drop_rows(CsrList& list, const std::vector<int32_t>& new_index, int threads) {
+void drop_rows(CsrList& list, const UninitializedVector<int32_t>& new_index, int threads) {
     const int64_t nv = static_cast<int64_t>(list.rows());
     const int64_t blocks = (nv + kRowBlock - 1) / kRowBlock;
     auto block_rows = [&](int64_t b) { return std::make_pair(b * kRowBlock, std::min(nv, (b + 1) * kRowBlock)); };
@@ -50,11 +52,11 @@ void drop_rows(CsrList& list, const std::vector<int32_t>& new_index, int threads
         saved_from[b] = std::min(src_end, std::max(src_begin, dst[b + 1]));
         saved_at[b + 1] = saved_at[b] + (src_end - saved_from[b]);
     }
-    std::vector<int32_t> saved(static_cast<std::size_t>(saved_at[blocks]));
+    UninitializedVector<int32_t> saved(static_cast<std::size_t>(saved_at[blocks]));
     parallel_for(blocks, threads, [&](int64_t b) {
         std::copy(list.items.begin() + saved_from[b], list.items.begin() + list.offsets[block_rows(b).second], saved.begin() + saved_at[b]);
     });
-    std::vector<int64_t> offsets(static_cast<std::size_t>(rows_before[blocks]) + 1);
+    UninitializedVector<int64_t> offsets(static_cast<std::size_t>(rows_before[blocks]) + 1);  // every entry written below
     parallel_for(blocks, threads, [&](int64_t b) {
         int64_t write = dst[b], row = rows_before[b];
         const int64_t end_from_list = saved_from[b], saved_shift = saved_at[b] - saved_from[b];  // source position -> saved
@@ -76,7 +78,7 @@ void drop_rows(CsrList& list, const std::vector<int32_t>& new_index, int threads
 // Turns the adjacency of the working mesh into the one of the compacted mesh (same triangles, in the same order),
 // in place: rows of removed vertices dropped and neighbour indices renumbered, both in parallel. The renumbering
 // keeps the order, so rows stay sorted. No rebuild, and no second copy of the lists.
-void renumber_adjacency(MeshAdjacency& adjacency, const std::vector<int32_t>& new_index, int threads) {
+void renumber_adjacency(MeshAdjacency& adjacency, const UninitializedVector<int32_t>& new_index, int threads) {
     CsrList& neighbours = adjacency.vertex_neighbours;
     parallel_blocks(static_cast<int64_t>(neighbours.rows()), threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t v = begin; v < end; ++v)
@@ -89,8 +91,9 @@ void renumber_adjacency(MeshAdjacency& adjacency, const std::vector<int32_t>& ne
 
 // Replaces the rows of the claimed vertices (ascending in `touched`) by `fresh` and renumbers the other rows' items
 // through `renumber` (may be null), in place. Between two touched rows every row moves by the same shift, so the
-// rows move as a few long segments; segments moving down go first, in vertex order, then those moving up, in reverse
-// order: neither overwrites a segment not yet moved (their final places are disjoint and keep the order). In place,
+// rows move as a few long segments, each in parallel chunks; segments moving down go first, in vertex order, then
+// those moving up, in reverse order: neither overwrites a segment not yet moved (their final places are disjoint
+// and keep the order). In place,
 // because a copy of both lists is ~160 MB of fresh pages at a million particles, for a pass that touched a few
 // hundred rows.
 void replace_rows(CsrList& list, const std::vector<int32_t>& touched, const std::vector<std::vector<int32_t>>& fresh,
@@ -117,11 +120,7 @@ void replace_rows(CsrList& list, const std::vector<int32_t>& touched, const std:
     }
     const int64_t old_total = list.offsets[nv];
     if (old_total + shift > old_total) list.items.resize(static_cast<std::size_t>(old_total + shift));
-    auto move = [&](const Segment& g) {
-        if (g.shift != 0 && g.old_end > g.old_begin)
-            std::memmove(list.items.data() + g.old_begin + g.shift, list.items.data() + g.old_begin,
-                         static_cast<std::size_t>(g.old_end - g.old_begin) * sizeof(int32_t));
-    };
+    auto move = [&](const Segment& g) { move_in_parallel(list.items.data(), g.old_begin, g.old_begin + g.shift, g.old_end - g.old_begin, threads); };
     for (const Segment& g : segments)
         if (g.shift < 0) move(g);
     for (auto g = segments.rbegin(); g != segments.rend(); ++g)
@@ -142,8 +141,8 @@ void replace_rows(CsrList& list, const std::vector<int32_t>& touched, const std:
 // fans. The same lists as a rebuild.
 void patch_adjacency(MeshAdjacency& adjacency, const CollapseMesh& work, const std::vector<int32_t>& triangles,
                      const std::vector<uint8_t>& claimed, int threads) {
-    const std::vector<uint8_t>& deleted = work.deleted_triangles();
-    std::vector<int32_t> new_id(deleted.size());
+    const UninitializedVector<uint8_t>& deleted = work.deleted_triangles();
+    UninitializedVector<int32_t> new_id(deleted.size());  // every entry numbered below
     number_kept(static_cast<int64_t>(deleted.size()), threads, [&](int64_t t) { return !deleted[t]; }, new_id.data());
     const int64_t nv = static_cast<int64_t>(claimed.size());
     // Claimed vertices: current triangles (new numbers, ascending) and neighbours, from the fans `work` reads in the
@@ -238,9 +237,10 @@ bool touches_pinned(const MeshAdjacency& adj, const Candidate& cand, const std::
 
 std::vector<Candidate> find_candidates(const MeshAdjacency& adj, int threads, const std::vector<uint8_t>* pinned) {
     const int64_t nv = static_cast<int64_t>(adj.vertex_neighbours.rows());
-    std::vector<int32_t> kind(static_cast<std::size_t>(nv), -2);  // -2 none, -1 single, >= 0 double partner
+    UninitializedVector<int32_t> kind(static_cast<std::size_t>(nv));  // -2 none, -1 single, >= 0 double partner
     parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t v = begin; v < end; ++v) {
+            kind[v] = -2;
             if (is_single_centre(adj, static_cast<int32_t>(v))) {
                 kind[v] = -1;
             } else {
@@ -279,8 +279,8 @@ void closed_two_ring(const MeshAdjacency& adj, const Candidate& cand, std::vecto
 
 // The candidates a greedy pass in candidate order takes (one is taken when no vertex of its closed two-ring was
 // claimed by one taken before it), selected in parallel with the same result; their two-rings get claim[v] = pass.
-std::vector<Candidate> select_disjoint(const MeshAdjacency& adj, const std::vector<Candidate>& candidates, std::vector<int32_t>& claim,
-                                       int32_t pass, std::vector<std::atomic<int32_t>>& lowest, int threads) {
+std::vector<Candidate> select_disjoint(const MeshAdjacency& adj, const std::vector<Candidate>& candidates, UninitializedVector<int32_t>& claim,
+                                       int32_t pass, UninitializedVector<std::atomic<int32_t>>& lowest, int threads) {
     std::vector<std::vector<int32_t>> regions(candidates.size());
     parallel_for(static_cast<int64_t>(candidates.size()), threads, [&](int64_t i) { closed_two_ring(adj, candidates[i], regions[i]); }, 16);
     const std::vector<uint8_t> taken = select_greedy_disjoint(regions, claim, pass, lowest, threads);
@@ -341,7 +341,7 @@ PassOutcome collapse_selected(const MeshAdjacency& adj, const std::vector<Candid
     return outcome;
 }
 
-std::vector<uint8_t> claimed_in(const std::vector<int32_t>& claim, int32_t pass, int threads) {
+std::vector<uint8_t> claimed_in(const UninitializedVector<int32_t>& claim, int32_t pass, int threads) {
     std::vector<uint8_t> claimed(claim.size());
     parallel_blocks(static_cast<int64_t>(claim.size()), threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t v = begin; v < end; ++v) claimed[v] = claim[v] == pass;
@@ -379,7 +379,7 @@ std::size_t count_double_vertex_configurations(const TriMesh& mesh) {
 
 
 std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_adjacency, const std::vector<uint8_t>* pinned) {
-    validate_mesh_arrays(mesh, "decimate_barnacles");
+    validate_mesh_arrays(mesh, "decimate_barnacles", threads);
     if (final_adjacency) *final_adjacency = MeshAdjacency{};
     threads = resolve_threads(threads);
     // The working arrays take the mesh's own (a copy was ~0.1 s of serial page faults at 1 M particles): compact_into
@@ -388,8 +388,9 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
     std::vector<int32_t> triangles = std::move(mesh.triangles);
     std::vector<float> positions = std::move(mesh.vertices);
     std::vector<uint8_t> removed(nv, 0);
-    std::vector<int32_t> claim(nv, -1);  // the pass whose selection claimed the vertex
-    std::vector<std::atomic<int32_t>> lowest;  // select_disjoint's scratch, made when there are candidates
+    UninitializedVector<int32_t> claim;  // the pass whose selection claimed the vertex
+    fill_in_parallel(claim, nv, int32_t{-1}, threads);
+    UninitializedVector<std::atomic<int32_t>> lowest;  // select_disjoint's scratch (written before read), made when there are candidates
     std::size_t removed_configurations = 0;
     bool changed = false;
 
@@ -398,20 +399,20 @@ std::size_t decimate_barnacles(TriMesh& mesh, int threads, MeshAdjacency* final_
     for (int pass = 0; pass < kMaxDetectionPasses; ++pass) {
         const std::vector<Candidate> candidates = find_candidates(adj, threads, pinned);
         if (candidates.empty()) break;
-        if (lowest.empty()) lowest = std::vector<std::atomic<int32_t>>(nv);
+        if (lowest.empty()) lowest = UninitializedVector<std::atomic<int32_t>>(nv);
         const std::vector<Candidate> selected = select_disjoint(adj, candidates, claim, pass, lowest, threads);
         CollapseMesh work(triangles, positions, adj.vertex_triangles, removed, threads);
         const PassOutcome outcome = collapse_selected(adj, selected, work, threads);
         removed_configurations += outcome.removed_configurations;
-        drop_deleted_triangles(triangles, work.deleted_triangles());
+        drop_deleted_triangles(triangles, work.deleted_triangles(), threads);
         changed = changed || outcome.changed;
         if (!outcome.changed) break;
         adjacency_is_current = pass + 1 < kMaxDetectionPasses;  // the last pass's collapses are not patched in
         if (adjacency_is_current) patch_adjacency(adj, work, triangles, claimed_in(claim, pass, threads), threads);
     }
     if (changed) {
-        claim = std::vector<int32_t>();
-        const std::vector<int32_t> new_index = compact_into(mesh, triangles, positions, removed, nullptr, threads);
+        claim = UninitializedVector<int32_t>();
+        const UninitializedVector<int32_t> new_index = compact_into(mesh, triangles, positions, removed, nullptr, threads);
         if (final_adjacency && adjacency_is_current) renumber_adjacency(adj, new_index, threads);
     } else {
         mesh.triangles = std::move(triangles);

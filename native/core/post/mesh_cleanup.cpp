@@ -237,7 +237,7 @@ std::size_t mesh_cleanup(TriMesh& mesh, double cube_edge, double snap_distance, 
         if (merged == 0) break;
     }
     if (collapsed == 0) return 0;
-    drop_deleted_triangles(triangles, work.deleted_triangles());
+    drop_deleted_triangles(triangles, work.deleted_triangles(), threads);
     compact_into(mesh, triangles, positions, removed, &work.group_next(), threads);
     return collapsed;
 }

@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <map>
 #include <mutex>
 
 #include "base/numbers.h"
+#include "base/parallel.h"
 #include "sph/kernel.h"
 
 namespace meniscus {
@@ -123,25 +126,85 @@ double flat_surface_count_ratio(double iso_threshold) {
     return ratio;
 }
 
-double bulk_neighbor_count(const std::vector<float>& neighbor_counts) {
-    if (neighbor_counts.empty()) return 0.0;
-    std::vector<float> counts = neighbor_counts;
-    // The 95th percentile sits among the fully surrounded particles unless the frame is almost all spray; the
-    // median of the particles within 25 % of it is the bulk value, robust against a few over-packed outliers.
-    const std::size_t p95 = static_cast<std::size_t>(0.95 * double(counts.size() - 1));
-    std::nth_element(counts.begin(), counts.begin() + static_cast<std::ptrdiff_t>(p95), counts.end());
-    const float high = counts[p95];
-    std::vector<float> bulk;
-    for (float c : neighbor_counts)
-        if (c >= 0.75f * high) bulk.push_back(c);
-    const std::size_t mid = bulk.size() / 2;
-    std::nth_element(bulk.begin(), bulk.begin() + static_cast<std::ptrdiff_t>(mid), bulk.end());
-    return bulk[mid];
+namespace {
+
+// Order-preserving unsigned key of a float (negative values flipped whole, positive ones with the sign bit set).
+inline uint32_t order_key(float value) {
+    uint32_t bits;
+    std::memcpy(&bits, &value, sizeof bits);
+    return (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
 }
 
-double halfspace_normalization(const std::vector<float>& neighbor_counts, double iso_threshold, double requested) {
+constexpr int64_t kSelectBlock = int64_t{1} << 16;
+constexpr int kBucketBits = 16;
+
+// The k-th smallest (0-based) of the values that take(value) accepts (k < their count), the value std::nth_element
+// finds, in two parallel passes instead of a serial partition of a copy: the taken values are counted per bucket of
+// their key's high bits (fixed blocks, integer counts: the same at any thread count), the bucket holding rank k is
+// found, and only its values are gathered and partitioned.
+template <class Take>
+float kth_smallest(const std::vector<float>& values, std::size_t k, int threads, Take&& take) {
+    const int64_t n = static_cast<int64_t>(values.size());
+    const int64_t blocks = (n + kSelectBlock - 1) / kSelectBlock;
+    const std::size_t buckets = std::size_t{1} << kBucketBits;
+    auto bucket_of = [](float v) { return order_key(v) >> (32 - kBucketBits); };
+    // Per block: counts per bucket, and per group of 256 buckets, so that the search reads few counts.
+    // (Made here rather than by the worker threads, whose allocations would land in their own malloc arenas.)
+    std::vector<std::vector<uint32_t>> block_counts(static_cast<std::size_t>(blocks), std::vector<uint32_t>(buckets)),
+        group_counts(static_cast<std::size_t>(blocks), std::vector<uint32_t>(buckets >> 8));
+    parallel_for(blocks, threads, [&](int64_t b) {
+        std::vector<uint32_t>& count = block_counts[static_cast<std::size_t>(b)];
+        std::vector<uint32_t>& group = group_counts[static_cast<std::size_t>(b)];
+        for (int64_t i = b * kSelectBlock, end = std::min(n, i + kSelectBlock); i < end; ++i)
+            if (take(values[i])) {
+                const uint32_t bucket = bucket_of(values[i]);
+                ++count[bucket], ++group[bucket >> 8];
+            }
+    });
+    // The first bucket whose values and those of the buckets before it number more than k (k < their total).
+    std::size_t below = 0;
+    auto step = [&](const std::vector<std::vector<uint32_t>>& counts, std::size_t first, std::size_t last) {
+        for (std::size_t i = first; i < last; ++i) {
+            std::size_t in = 0;
+            for (const auto& c : counts) in += c[i];
+            if (below + in > k || i + 1 == last) return i;
+            below += in;
+        }
+        return last - 1;
+    };
+    const std::size_t group = step(group_counts, 0, buckets >> 8);
+    const std::size_t bucket = step(block_counts, group << 8, (group + 1) << 8);
+    std::vector<std::vector<float>> block_members(static_cast<std::size_t>(blocks));
+    parallel_for(blocks, threads, [&](int64_t b) {
+        if (block_counts[static_cast<std::size_t>(b)][bucket] == 0) return;
+        for (int64_t i = b * kSelectBlock, end = std::min(n, i + kSelectBlock); i < end; ++i)
+            if (take(values[i]) && bucket_of(values[i]) == bucket) block_members[static_cast<std::size_t>(b)].push_back(values[i]);
+    });
+    std::vector<float> members;
+    for (const auto& m : block_members) members.insert(members.end(), m.begin(), m.end());
+    const std::size_t rank = k - below;
+    std::nth_element(members.begin(), members.begin() + static_cast<std::ptrdiff_t>(rank), members.end());
+    return members[rank];
+}
+
+}  // namespace
+
+double bulk_neighbor_count(const std::vector<float>& neighbor_counts, int threads) {
+    if (neighbor_counts.empty()) return 0.0;
+    // The 95th percentile sits among the fully surrounded particles unless the frame is almost all spray; the
+    // median of the particles within 25 % of it is the bulk value, robust against a few over-packed outliers.
+    const std::size_t p95 = static_cast<std::size_t>(0.95 * double(neighbor_counts.size() - 1));
+    const float high = kth_smallest(neighbor_counts, p95, threads, [](float) { return true; });
+    const float low = 0.75f * high;
+    auto in_bulk = [low](float c) { return c >= low; };
+    const std::size_t bulk = parallel_count(static_cast<int64_t>(neighbor_counts.size()), threads,
+                                            [&](int64_t i) { return in_bulk(neighbor_counts[i]); });
+    return bulk == 0 ? high : kth_smallest(neighbor_counts, bulk / 2, threads, in_bulk);
+}
+
+double halfspace_normalization(const std::vector<float>& neighbor_counts, double iso_threshold, double requested, int threads) {
     if (requested > 0.0) return requested;
-    const double value = flat_surface_count_ratio(iso_threshold) * bulk_neighbor_count(neighbor_counts);
+    const double value = flat_surface_count_ratio(iso_threshold) * bulk_neighbor_count(neighbor_counts, threads);
     return value > 0.0 ? value : 1.0;
 }
 
@@ -150,11 +213,13 @@ std::vector<float> feature_weights(const SphField& field, const std::vector<floa
     std::vector<float> weights;
     interpolate_sorted_at_points(field, neighbor_counts.data(), 1, points, weights, threads);
     const float inverse = static_cast<float>(1.0 / normalization);
-    for (float& w : weights) {
-        float x = std::min(std::max(w * inverse, 0.0f), 1.0f);  // Eq. 8 (min, not max)
-        if (smoothstep) x = x * x * x * (x * (6.0f * x - 15.0f) + 10.0f);  // Eq. 9
-        w = x;
-    }
+    parallel_blocks(static_cast<int64_t>(weights.size()), threads, kSelectBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i) {
+            float x = std::min(std::max(weights[i] * inverse, 0.0f), 1.0f);  // Eq. 8 (min, not max)
+            if (smoothstep) x = x * x * x * (x * (6.0f * x - 15.0f) + 10.0f);  // Eq. 9
+            weights[i] = x;
+        }
+    });
     return weights;
 }
 

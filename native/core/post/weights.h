@@ -15,11 +15,11 @@ double flat_surface_count_ratio(double iso_threshold);
 
 // Bulk (full-neighbourhood) hat-weighted count of a frame's particles: a robust high-end statistic of the
 // per-particle counts, so that it follows the frame's own packing (compressed or expanded fluids). 0 without particles.
-double bulk_neighbor_count(const std::vector<float>& neighbor_counts);
+double bulk_neighbor_count(const std::vector<float>& neighbor_counts, int threads);
 
 // N_HS: `requested` when > 0, otherwise flat_surface_count_ratio(iso_threshold) times the bulk count (1 when that
 // is not positive: a frame without bulk gets weight 0 everywhere anyway).
-double halfspace_normalization(const std::vector<float>& neighbor_counts, double iso_threshold, double requested);
+double halfspace_normalization(const std::vector<float>& neighbor_counts, double iso_threshold, double requested, int threads);
 
 // Weight lambda_i in [0, 1] for each point (3 floats each), from the particles' neighbour counts (sorted order, as
 // the densities hold them). Points with no particle in reach get 0.

@@ -17,7 +17,7 @@ ParticleDensities compute_densities(const ParticleGrid& grid, const CubicSplineK
     const float support_squared = kernel.support_squared();
     const float inverse_support = 1.0f / kernel.support();
     const float normalisation = kernel.value(0.0f);  // W(0) = 8 / (pi H^3): shapes are summed, scaled once
-    const LanePositions lanes(grid);
+    const LanePositions lanes(grid, threads);
     const float *xs = lanes.x.data(), *ys = lanes.y.data(), *zs = lanes.z.data();
     parallel_for(static_cast<int64_t>(grid.num_cells()), threads, [&](int64_t cell) {
         const auto c = grid.cell_coords(static_cast<std::size_t>(cell));

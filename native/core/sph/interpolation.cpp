@@ -56,9 +56,9 @@ void interpolate_scalar_sorted(const SphField& field, const float* values, const
                                int threads) {
     out.assign(points.size() / 3, 0.0f);
     const float support_squared = field.kernel.support_squared(), inverse_support = 1.0f / field.kernel.support();
-    const LanePositions lanes(field.grid);
-    const std::vector<float> volumes = padded(field.volumes.data(), field.grid.size());
-    const std::vector<float> sorted_values = padded(values, field.grid.size());
+    const LanePositions lanes(field.grid, threads);
+    const UninitializedVector<float> volumes = padded(field.volumes.data(), field.grid.size(), threads);
+    const UninitializedVector<float> sorted_values = padded(values, field.grid.size(), threads);
     for_each_point(points, threads, [&](int64_t p, ParticleGrid::NeighborCells& cache) {
         const float px = points[3 * p], py = points[3 * p + 1], pz = points[3 * p + 2];
         const ParticleGrid::NeighborCells& cells = field.grid.neighbor_cells(&points[3 * p], cache);

@@ -31,21 +31,28 @@ namespace {
 
 constexpr int64_t kGridBlock = int64_t{1} << 16;
 
+// A particle's cell key and input index (a plain struct rather than a std::pair, whose default constructor writes
+// zeros: the sort's arrays are filled by parallel loops, which should be the first to touch their pages).
+struct KeyedParticle {
+    uint64_t key;
+    uint32_t index;
+};
+
 // Stable LSD radix sort of (dense cell index, input index) pairs by the cell index, 8 bits per pass over the bits
 // in use. The pairs arrive in input order, so the result is ordered by (cell, input index): a total order, the
 // same for any thread count. Several times faster than a comparison sort for a million particles. Each pass counts
 // digits per fixed block in parallel; a block's items of one digit go after those of the same digit in earlier
 // blocks, which is where a serial stable pass puts them.
-void radix_sort_by_cell(std::vector<std::pair<uint64_t, uint32_t>>& items, uint64_t largest_key, int threads) {
+void radix_sort_by_cell(UninitializedVector<KeyedParticle>& items, uint64_t largest_key, int threads) {
     const int64_t n = static_cast<int64_t>(items.size());
     const int64_t blocks = (n + kGridBlock - 1) / kGridBlock;
-    std::vector<std::pair<uint64_t, uint32_t>> buffer(items.size());
+    UninitializedVector<KeyedParticle> buffer(items.size());  // every item written by the first pass
     std::vector<std::array<std::size_t, 256>> next(static_cast<std::size_t>(blocks));
     for (int shift = 0; shift < 64 && (largest_key >> shift) != 0; shift += 8) {
         parallel_for(blocks, threads, [&](int64_t b) {
             std::array<std::size_t, 256>& count = next[static_cast<std::size_t>(b)];
             count.fill(0);
-            for (int64_t i = b * kGridBlock, end = std::min(n, i + kGridBlock); i < end; ++i) ++count[(items[i].first >> shift) & 0xff];
+            for (int64_t i = b * kGridBlock, end = std::min(n, i + kGridBlock); i < end; ++i) ++count[(items[i].key >> shift) & 0xff];
         });
         std::size_t start = 0;  // digit-major: all blocks' 0s, then all blocks' 1s, ...
         for (int digit = 0; digit < 256; ++digit)
@@ -56,7 +63,7 @@ void radix_sort_by_cell(std::vector<std::pair<uint64_t, uint32_t>>& items, uint6
             }
         parallel_for(blocks, threads, [&](int64_t b) {
             std::array<std::size_t, 256>& at = next[static_cast<std::size_t>(b)];
-            for (int64_t i = b * kGridBlock, end = std::min(n, i + kGridBlock); i < end; ++i) buffer[at[(items[i].first >> shift) & 0xff]++] = items[i];
+            for (int64_t i = b * kGridBlock, end = std::min(n, i + kGridBlock); i < end; ++i) buffer[at[(items[i].key >> shift) & 0xff]++] = items[i];
         });
         items.swap(buffer);
     }
@@ -83,7 +90,7 @@ ParticleGrid::ParticleGrid(const PositionsView& input, double cell_size, int thr
 
     // Cells, and their bounds folded over fixed blocks (minima and maxima: any order gives the same). A coordinate too
     // large is reported for the first such particle, as a serial loop would.
-    std::vector<int64_t> cells(3 * m);
+    UninitializedVector<int64_t> cells(3 * m);  // written below, or a particle is refused
     const CellBounds bounds = ordered_block_reduce(
         static_cast<int64_t>(m), threads, kGridBlock, CellBounds{},
         [&](int64_t begin, int64_t end, CellBounds& block) {
@@ -134,30 +141,30 @@ ParticleGrid::ParticleGrid(const PositionsView& input, double cell_size, int thr
     // Sorted by (cell, input index): a total order, so the result does not depend on the thread count. The radix
     // sort runs on a dense index of the cell in the bounding box of cells (z, then y, then x: the order of the packed
     // keys), which needs only as many passes as its bits.
-    std::vector<std::pair<uint64_t, uint32_t>> order(m);
+    UninitializedVector<KeyedParticle> order(m);
     const uint64_t ex = static_cast<uint64_t>(extent_[0]), ey = static_cast<uint64_t>(extent_[1]);
     parallel_for(static_cast<int64_t>(m), threads, [&](int64_t s) {
         const uint64_t x = static_cast<uint64_t>(cells[3 * s] - lo[0]), y = static_cast<uint64_t>(cells[3 * s + 1] - lo[1]),
                        z = static_cast<uint64_t>(cells[3 * s + 2] - lo[2]);
-        order[s] = {(z * ey + y) * ex + x, selected[s]};
+        order[s] = KeyedParticle{(z * ey + y) * ex + x, selected[s]};
     }, 4096);
     radix_sort_by_cell(order, ex * ey * static_cast<uint64_t>(extent_[2]) - 1, threads);
     parallel_for(static_cast<int64_t>(m), threads, [&](int64_t s) {  // back to packed keys, which the cell lookups use
         auto& item = order[s];
-        const uint64_t x = item.first % ex, y = item.first / ex % ey, z = item.first / ex / ey;
-        item.first = pack(static_cast<int64_t>(x) + lo[0], static_cast<int64_t>(y) + lo[1], static_cast<int64_t>(z) + lo[2]);
+        const uint64_t x = item.key % ex, y = item.key / ex % ey, z = item.key / ex / ey;
+        item.key = pack(static_cast<int64_t>(x) + lo[0], static_cast<int64_t>(y) + lo[1], static_cast<int64_t>(z) + lo[2]);
     }, 4096);
 
     positions_.resize(3 * m);
     original_index_.resize(m);
     parallel_for(static_cast<int64_t>(m), threads, [&](int64_t s) {
-        const uint32_t i = order[s].second;
+        const uint32_t i = order[s].index;
         original_index_[s] = i;
         for (int k = 0; k < 3; ++k) positions_[3 * s + k] = static_cast<float>(input.coord(i, k));
     }, 4096);
-    cell_start_ = kept_indices<uint32_t>(static_cast<int64_t>(m), threads, [&](int64_t s) { return s == 0 || order[s].first != order[s - 1].first; });
+    cell_start_ = kept_indices<uint32_t>(static_cast<int64_t>(m), threads, [&](int64_t s) { return s == 0 || order[s].key != order[s - 1].key; });
     cell_keys_.resize(cell_start_.size());
-    parallel_for(static_cast<int64_t>(cell_start_.size()), threads, [&](int64_t c) { cell_keys_[c] = order[cell_start_[c]].first; }, 4096);
+    parallel_for(static_cast<int64_t>(cell_start_.size()), threads, [&](int64_t c) { cell_keys_[c] = order[cell_start_[c]].key; }, 4096);
     cell_start_.push_back(static_cast<uint32_t>(m));
 }
 

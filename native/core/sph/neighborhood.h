@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "base/uninitialized_vector.h"
 #include "sph/particles.h"
 
 namespace meniscus {
@@ -22,12 +23,15 @@ public:
     std::size_t size() const { return original_index_.size(); }
     double cell_size() const { return cell_size_; }
     std::size_t num_cells() const { return cell_keys_.size(); }
+    // The box of occupied cells: smallest cell coordinates and the number of cells per axis (zero without particles).
+    const std::array<int64_t, 3>& cell_origin() const { return origin_; }
+    const std::array<int64_t, 3>& cell_extent() const { return extent_; }
 
     // Sorted particle j: position and index in the caller's array.
     const float* position(std::size_t j) const { return &positions_[3 * j]; }
-    const std::vector<float>& positions() const { return positions_; }
+    const UninitializedVector<float>& positions() const { return positions_; }
     uint32_t original_index(std::size_t j) const { return original_index_[j]; }
-    const std::vector<uint32_t>& original_indices() const { return original_index_; }
+    const UninitializedVector<uint32_t>& original_indices() const { return original_index_; }
 
     // Cell coordinates (absolute integer lattice coordinates of edge cell_size).
     std::array<int64_t, 3> cell_of(const float* x) const;
@@ -106,8 +110,8 @@ private:
     double cell_size_;
     std::array<int64_t, 3> origin_{};   // smallest occupied cell coordinates
     std::array<int64_t, 3> extent_{};   // occupied cell range per axis
-    std::vector<float> positions_;      // sorted by cell key, then by original index
-    std::vector<uint32_t> original_index_;
+    UninitializedVector<float> positions_;  // sorted by cell key, then by original index (filled in parallel)
+    UninitializedVector<uint32_t> original_index_;
     std::vector<uint64_t> cell_keys_;   // ascending, occupied cells only
     std::vector<uint32_t> cell_start_;  // num_cells + 1
 };

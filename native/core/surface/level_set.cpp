@@ -1,14 +1,17 @@
 #include "surface/level_set.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdlib>
+#include <memory>
 #include <string>
 
 #if defined(__SSE2__) || defined(_M_X64)
 #include <immintrin.h>
 #endif
 
+#include "base/compaction.h"
 #include "base/parallel.h"
 
 namespace meniscus {
@@ -170,10 +173,55 @@ private:
 
 }  // namespace
 
-std::vector<LatticeCoords> bricks_near_particles(const ParticleGrid& grid, double compact_support, double cube_edge, int threads) {
+namespace {
+
+// Bricks a cell's particles reach (with their kernel support and one cube, for the cubes' edges), [lo, hi] per axis.
+// Non-decreasing in the cell's coordinates.
+void bricks_of_cell(const std::array<int64_t, 3>& c, double cell, double margin, double cube_edge, LatticeCoords& lo, LatticeCoords& hi) {
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = floor_div(static_cast<int64_t>(std::floor((double(c[k]) * cell - margin) / cube_edge)), kBrick);
+        hi[k] = floor_div(static_cast<int64_t>(std::ceil((double(c[k] + 1) * cell + margin) / cube_edge)), kBrick);
+    }
+}
+
+// Bricks per occupied cell, beyond which a flag per brick of the bricks' bounding box costs more than sorting the
+// bricks each cell lists (sparse frames: spray far from the bulk).
+constexpr int64_t kDenseBricksPerCell = 32;
+constexpr int64_t kDenseBricksAlways = int64_t{1} << 20;
+
+// The bricks of the listed cells as the flags of their bounding box: every cell marks its bricks (the same flag
+// from several threads: relaxed atomic stores), then the marked ones in the box's (z, y, x) order, which is
+// coords_less order, each once.
+std::vector<LatticeCoords> marked_bricks(const ParticleGrid& grid, double margin, double cube_edge, const LatticeCoords& box_lo,
+                                         const LatticeCoords& box_hi, int threads) {
+    const int64_t nx = box_hi[0] - box_lo[0] + 1, ny = box_hi[1] - box_lo[1] + 1, nz = box_hi[2] - box_lo[2] + 1;
+    const int64_t box = nx * ny * nz;
+    std::unique_ptr<std::atomic<uint8_t>[]> marked(new std::atomic<uint8_t>[static_cast<std::size_t>(box)]);
+    parallel_blocks(box, threads, int64_t{1} << 16, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i) marked[i].store(0, std::memory_order_relaxed);
+    });
+    parallel_blocks(static_cast<int64_t>(grid.num_cells()), threads, 1024, [&](int64_t begin, int64_t end) {
+        LatticeCoords lo, hi;
+        for (int64_t cell_index = begin; cell_index < end; ++cell_index) {
+            bricks_of_cell(grid.cell_coords(static_cast<std::size_t>(cell_index)), grid.cell_size(), margin, cube_edge, lo, hi);
+            for (int64_t z = lo[2]; z <= hi[2]; ++z)
+                for (int64_t y = lo[1]; y <= hi[1]; ++y)
+                    for (int64_t x = lo[0]; x <= hi[0]; ++x)
+                        marked[((z - box_lo[2]) * ny + (y - box_lo[1])) * nx + (x - box_lo[0])].store(1, std::memory_order_relaxed);
+        }
+    });
+    const std::vector<int64_t> flat = kept_indices<int64_t>(box, threads, [&](int64_t i) { return marked[i].load(std::memory_order_relaxed) != 0; });
+    std::vector<LatticeCoords> bricks(flat.size());
+    parallel_blocks(static_cast<int64_t>(flat.size()), threads, 4096, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i)
+            bricks[i] = {box_lo[0] + flat[i] % nx, box_lo[1] + flat[i] / nx % ny, box_lo[2] + flat[i] / (nx * ny)};
+    });
+    return bricks;
+}
+
+// The same bricks by listing them per cell and sorting, for boxes too sparse to flag.
+std::vector<LatticeCoords> listed_bricks(const ParticleGrid& grid, double margin, double cube_edge, int threads) {
     std::vector<std::vector<LatticeCoords>> per_thread(static_cast<std::size_t>(threads));
-    const double cell = grid.cell_size();
-    const double margin = compact_support + cube_edge;
     ParallelErrors errors;
 #pragma omp parallel num_threads(threads)
     {
@@ -185,12 +233,8 @@ std::vector<LatticeCoords> bricks_near_particles(const ParticleGrid& grid, doubl
 #pragma omp for schedule(static)
         for (int64_t cell_index = 0; cell_index < static_cast<int64_t>(grid.num_cells()); ++cell_index)
             errors.run([&] {
-                const auto c = grid.cell_coords(static_cast<std::size_t>(cell_index));
                 LatticeCoords lo, hi;
-                for (int k = 0; k < 3; ++k) {
-                    lo[k] = floor_div(static_cast<int64_t>(std::floor((double(c[k]) * cell - margin) / cube_edge)), kBrick);
-                    hi[k] = floor_div(static_cast<int64_t>(std::ceil((double(c[k] + 1) * cell + margin) / cube_edge)), kBrick);
-                }
+                bricks_of_cell(grid.cell_coords(static_cast<std::size_t>(cell_index)), grid.cell_size(), margin, cube_edge, lo, hi);
                 for (int64_t z = lo[2]; z <= hi[2]; ++z)
                     for (int64_t y = lo[1]; y <= hi[1]; ++y)
                         for (int64_t x = lo[0]; x <= hi[0]; ++x) mine.push_back({x, y, z});
@@ -208,6 +252,24 @@ std::vector<LatticeCoords> bricks_near_particles(const ParticleGrid& grid, doubl
     std::sort(bricks.begin(), bricks.end(), coords_less);
     bricks.erase(std::unique(bricks.begin(), bricks.end()), bricks.end());
     return bricks;
+}
+
+}  // namespace
+
+std::vector<LatticeCoords> bricks_near_particles(const ParticleGrid& grid, double compact_support, double cube_edge, int threads) {
+    if (grid.num_cells() == 0) return {};
+    const double margin = compact_support + cube_edge;
+    // The bricks' bounding box, from the corner cells of the occupied box (bricks_of_cell is monotonic).
+    const std::array<int64_t, 3>& origin = grid.cell_origin();
+    const std::array<int64_t, 3>& extent = grid.cell_extent();
+    const std::array<int64_t, 3> last{origin[0] + extent[0] - 1, origin[1] + extent[1] - 1, origin[2] + extent[2] - 1};
+    LatticeCoords box_lo, box_hi, unused;
+    bricks_of_cell(origin, grid.cell_size(), margin, cube_edge, box_lo, unused);
+    bricks_of_cell(last, grid.cell_size(), margin, cube_edge, unused, box_hi);
+    double box = 1.0;
+    for (int k = 0; k < 3; ++k) box *= double(box_hi[k] - box_lo[k] + 1);
+    const double dense_limit = std::max(double(kDenseBricksAlways), double(kDenseBricksPerCell) * double(grid.num_cells()));
+    return box <= dense_limit ? marked_bricks(grid, margin, cube_edge, box_lo, box_hi, threads) : listed_bricks(grid, margin, cube_edge, threads);
 }
 
 BrickSampler colour_field_sampler(const SphField& field, double cube_edge, double threshold) {
