@@ -548,7 +548,7 @@ int heat_filter(std::vector<float>& x, int dims, const MeshAdjacency& adjacency,
 
 HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& weights_in,
                                 const HeatSmoothingSettings& settings, const UnsmoothedSurface& unsmoothed, int threads) {
-    validate_mesh_arrays(mesh, "heat_smooth");
+    validate_mesh_arrays(mesh, "heat_smooth", threads);
     HeatSmoothingReport report;
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
     if (adjacency.vertex_neighbours.rows() != mesh.num_vertices()) throw InputError("heat_smooth: the adjacency does not belong to this mesh");

@@ -212,7 +212,7 @@ std::size_t merge_round(LatticeMerger& merger, const std::vector<Tiling>& tiling
 }  // namespace
 
 std::size_t mesh_cleanup(TriMesh& mesh, double cube_edge, double snap_distance, int threads, const std::vector<uint8_t>* pinned) {
-    validate_mesh_arrays(mesh, "mesh_cleanup");
+    validate_mesh_arrays(mesh, "mesh_cleanup", threads);
     if (!(cube_edge > 0.0) || !std::isfinite(cube_edge))
         throw InputError("mesh_cleanup: cube_edge must be positive and finite, got " + std::to_string(cube_edge));
     if (!std::isfinite(snap_distance))

@@ -97,12 +97,12 @@ std::vector<float> smoothed_vertex_normals(const TriMesh& mesh, const MeshAdjace
 }
 
 void compute_area_weighted_normals(TriMesh& mesh, int threads) {
-    validate_mesh_arrays(mesh, "compute_area_weighted_normals");
+    validate_mesh_arrays(mesh, "compute_area_weighted_normals", threads);
     mesh.normals = area_weighted_normals(mesh, build_vertex_triangles(mesh, threads), threads);
 }
 
 void smooth_normals(TriMesh& mesh, int iterations, int threads) {
-    validate_mesh_arrays(mesh, "smooth_normals");
+    validate_mesh_arrays(mesh, "smooth_normals", threads);
     if (iterations < 0) throw InputError("smooth_normals: iterations must be >= 0, got " + std::to_string(iterations));
     if (iterations == 0 && !mesh.normals.empty()) return;
     const MeshAdjacency adjacency = build_adjacency(mesh, threads);

@@ -39,7 +39,7 @@ void umbrella_step(const CsrList& neighbours, const float* in, float* out, const
 }
 
 void laplacian_smooth(TriMesh& mesh, const std::vector<float>& weights, int iterations, double beta, int threads) {
-    validate_mesh_arrays(mesh, "laplacian_smooth");
+    validate_mesh_arrays(mesh, "laplacian_smooth", threads);
     if (iterations <= 0 || mesh.num_vertices() == 0) {
         laplacian_smooth(mesh, MeshAdjacency{}, weights, iterations, beta, threads);
         return;
@@ -49,7 +49,7 @@ void laplacian_smooth(TriMesh& mesh, const std::vector<float>& weights, int iter
 
 void laplacian_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& weights, int iterations, double beta,
                       int threads, const WallConstraints* walls) {
-    validate_mesh_arrays(mesh, "laplacian_smooth");
+    validate_mesh_arrays(mesh, "laplacian_smooth", threads);
     const std::size_t nv = mesh.num_vertices();
     if (iterations < 0) throw InputError("laplacian_smooth: iterations must be >= 0, got " + std::to_string(iterations));
     if (!(beta >= 0.0 && beta <= 1.0))
