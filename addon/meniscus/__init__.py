@@ -36,6 +36,8 @@ def _wait_briefly_at_barriers():
         if spec is None or not spec.origin:
             return
         path = os.path.join(os.path.dirname(spec.origin), "waiting.py")
+        if not os.path.exists(path):  # an older library without it: its own __init__ sets the policy, or none does
+            return
     spec = importlib.util.spec_from_file_location("_meniscus_waiting", path)
     waiting = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(waiting)

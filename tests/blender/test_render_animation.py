@@ -4,6 +4,7 @@ those of a render without build-ahead."""
 import os
 import sys
 import tempfile
+import time
 
 import bpy
 import numpy as np
@@ -51,6 +52,37 @@ def test_animation_render_with_motion_blur():
     check(all(triangles > 0 for _, triangles in shown), f"empty surface in a rendered frame: {shown}")
     check(not surface.meniscus.status_is_error, surface.meniscus.status)
 
+
+
+def test_render_end_drops_the_next_frame_not_yet_started():
+    # A render cancelled (or ended) while the worker still had the next frame queued: that work is dropped, not
+    # built for nobody. The worker is held on another job so that the frame stays queued.
+    import threading
+    playback = sys.modules[type(update._prefetcher).__module__]
+    app_handlers = _support.addon_modules(addon, "blender.app_handlers")
+    release = threading.Event()
+    blocker = playback.FrameCache(1 << 20)
+    scene.frame_start, scene.frame_end = 29, 31
+    frame_before = scene.frame_current
+    scene.frame_set(29)
+    # The viewport's own prefetch of frames 30-32 finished and dropped, so that frame 30 is not already there.
+    deadline = time.monotonic() + 60
+    while not update._prefetcher.idle() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    update._memory.frame_cache(surface.data.as_pointer()).clear()
+    render_state.set_rendering(True)
+    try:
+        update._prefetcher.want(blocker, [("hold the worker", lambda: release.wait(30) and None)])
+        update.build_next_render_frame(scene)
+        queued = [slot for slot in update._prefetcher._wanted if slot[0] != id(blocker)]
+        check(len(queued) == 1, f"frame 30 not queued: {list(update._prefetcher._wanted)}")
+        app_handlers.meniscus_render_done(scene)
+        left = [slot for slot in update._prefetcher._wanted if slot[0] != id(blocker)]
+        check(left == [], f"still queued after the render ended: {left}")
+    finally:
+        release.set()
+        render_state.set_rendering(False)
+        scene.frame_set(frame_before)  # the saved copies of the next test start where they did
 
 def _render_saved_copy(name, build_ahead):
     """Renders frames 29-31 of a saved copy in a new process, as a farm node does; returns (the surface's status

@@ -48,6 +48,7 @@ def meniscus_render_init(scene, *_args):
 
 @persistent
 def meniscus_render_write(scene, *_args):
+    render_state.note_frame_written()
     # An interactive render cannot be stopped: the image of a frame whose surface failed is set aside once written.
     try:
         render_policy.set_aside_failed_image(scene)
@@ -69,6 +70,7 @@ def meniscus_render_pre(scene, *_args):
 @persistent
 def meniscus_render_done(scene, *_args):
     render_state.set_rendering(False)
+    update.drop_render_build_ahead()  # a cancelled render's next frame is not wanted any more (bpy-free)
     if bpy.app.background:  # no viewport to restore; the next frame change uses the viewport settings anyway
         return
     # Back to viewport resolution, but on the main thread (this handler may run on the render thread).

@@ -14,11 +14,20 @@ import bpy
 BUILD_AHEAD_VARIABLE = "MENISCUS_RENDER_BUILD_AHEAD"
 
 _render_in_progress = False
+# Frames the current render has written (render_write): in the UI only an animation writes frames, so it tells an
+# animation from a still render (F12), which may change the frame too but never needs the next one.
+_frames_written = 0
 
 
 def set_rendering(active):
-    global _render_in_progress
+    global _render_in_progress, _frames_written
     _render_in_progress = bool(active)
+    _frames_written = 0
+
+
+def note_frame_written():
+    global _frames_written
+    _frames_written += 1
 
 
 def is_rendering():
@@ -36,11 +45,13 @@ def is_rendering():
 
 def renders_more_frames():
     """Whether a frame change inside a render may be followed by more frames of the same render, so that building
-    the next one ahead is worth it. A still render (F12) never changes the frame; `blender -b scene.blend -f 30` does,
-    as an animation of one frame, which only its command line tells apart."""
+    the next one ahead is worth it. `blender -b scene.blend -f 30` changes the frame as an animation of one frame,
+    which only its command line tells apart; in the UI a still render (F12) is told apart by writing no frame."""
     if os.environ.get(BUILD_AHEAD_VARIABLE, "1").strip() == "0":
         return False
-    if not bpy.app.background or not bpy.app.binary_path:  # the UI, or the bpy module driven by a script
+    if not bpy.app.background:  # the UI: an animation from its second frame on (it has written one)
+        return _frames_written > 0
+    if not bpy.app.binary_path:  # the bpy module driven by a script
         return True
     arguments = sys.argv[:sys.argv.index("--")] if "--" in sys.argv else sys.argv
     renders_animation = "-a" in arguments or "--render-anim" in arguments
