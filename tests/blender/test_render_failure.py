@@ -109,4 +109,28 @@ def test_interactive_render_sets_the_failed_frames_image_aside():
     check(os.path.exists(written[30].replace(".png", ".meniscus-failed.png")), os.listdir(os.path.dirname(written[30])))
 
 
+
+def test_interactive_stereo_render_sets_each_views_image_aside():
+    # Views written as individual images (frame_0030_L.png, frame_0030_R.png): each one of the failed frame is renamed.
+    render_policy, app_handlers = _support.addon_modules(addon, "blender.render_policy", "blender.app_handlers")
+    render = scene.render
+    render.use_multiview, render.image_settings.views_format = True, "INDIVIDUAL"
+    try:
+        app_handlers.meniscus_render_init(scene)
+        render_policy.report_unstoppable_failure("Meniscus: surface 'x' cannot be built for frame 31: test", 31)
+        scene.frame_current = 31
+        paths = [bpy.path.abspath(render.frame_path(frame=31, view=view.name)) for view in render.views if view.use]
+        check(len(paths) == 2 and len(set(paths)) == 2, paths)
+        for path in paths:
+            os.makedirs(os.path.dirname(path), exist_ok=True)
+            with open(path, "wb") as image:
+                image.write(b"rendered without the surface")
+        app_handlers.meniscus_render_write(scene)
+        for path in paths:
+            check(not os.path.exists(path), f"a view's image of the failed frame stays as if fine: {path}")
+            root, extension = os.path.splitext(path)
+            check(os.path.exists(root + ".meniscus-failed" + extension), os.listdir(os.path.dirname(path)))
+    finally:
+        render.use_multiview = False
+
 _support.run(globals(), cleanup=addon.unregister)

@@ -70,25 +70,33 @@ def report_unstoppable_failure(message, frame):
 
 def set_aside_failed_image(scene):
     """After an interactive render wrote a frame (render_write): renames the image of a frame that failed under STOP
-    to <name>.meniscus-failed<ext>, so that nothing downstream takes it for a good frame (a movie file cannot be
-    changed: the message stays the only sign). Returns the new path, or None."""
+    to <name>.meniscus-failed<ext> (each view's image of a stereo render written as individual views), so that
+    nothing downstream takes it for a good frame (a movie file cannot be changed: the message stays the only sign).
+    Returns the new paths (empty when nothing was renamed)."""
     frame = scene.frame_current
     if frame not in _failed_frames:
-        return None
+        return []
     _failed_frames.discard(frame)
-    if scene.render.is_movie_format:
+    render = scene.render
+    if render.is_movie_format:
         print(f"Meniscus: frame {frame} of the movie renders without the surface (see the error above)")
-        return None
-    path = bpy.path.abspath(scene.render.frame_path(frame=frame))
-    root, extension = os.path.splitext(path)
-    failed_path = root + FAILED_IMAGE_MARK + extension
-    try:
-        os.replace(path, failed_path)
-    except OSError as error:
-        print(f"Meniscus: could not rename the failed frame's image {path}: {error}")
-        return None
-    print(f"Meniscus: frame {frame} rendered without the surface; its image was renamed to {failed_path}")
-    return failed_path
+        return []
+    if render.use_multiview and render.image_settings.views_format == "INDIVIDUAL":  # frame_0030_L.png, _R.png
+        paths = [render.frame_path(frame=frame, view=view.name) for view in render.views if view.use]
+    else:
+        paths = [render.frame_path(frame=frame)]
+    renamed = []
+    for path in map(bpy.path.abspath, paths):
+        root, extension = os.path.splitext(path)
+        failed_path = root + FAILED_IMAGE_MARK + extension
+        try:
+            os.replace(path, failed_path)
+        except OSError as error:
+            print(f"Meniscus: could not rename the failed frame's image {path}: {error}")
+            continue
+        print(f"Meniscus: frame {frame} rendered without the surface; its image was renamed to {failed_path}")
+        renamed.append(failed_path)
+    return renamed
 
 
 def forget_failed_frames():
