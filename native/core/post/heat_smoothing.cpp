@@ -169,22 +169,20 @@ void chebyshev_term(bool accumulate, const UmbrellaRows& rows, const float* step
 // The centre of the bounding box of 3 floats per vertex.
 void bounding_box_centre(const std::vector<float>& x, int threads, float centre[3]) {
     const int64_t nv = static_cast<int64_t>(x.size() / 3);
-    {
-        // The box in fixed blocks folded in order: the serial loop's bits (down to which of +0 and -0 it keeps).
-        struct Box {
-            float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-        };
-        const Box box = ordered_block_reduce(
-            nv, threads, 16 * kBlock, Box{},
-            [&](int64_t begin, int64_t end, Box& b) {
-                for (int64_t i = begin; i < end; ++i)
-                    for (int d = 0; d < 3; ++d) b.lo[d] = std::min(b.lo[d], x[3 * i + d]), b.hi[d] = std::max(b.hi[d], x[3 * i + d]);
-            },
-            [](Box& total, const Box& b) {
-                for (int d = 0; d < 3; ++d) total.lo[d] = std::min(total.lo[d], b.lo[d]), total.hi[d] = std::max(total.hi[d], b.hi[d]);
-            });
-        for (int d = 0; d < 3; ++d) centre[d] = 0.5f * box.lo[d] + 0.5f * box.hi[d];
-    }
+    // The box in fixed blocks folded in order: the serial loop's bits (down to which of +0 and -0 it keeps).
+    struct Box {
+        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    };
+    const Box box = ordered_block_reduce(
+        nv, threads, 16 * kBlock, Box{},
+        [&](int64_t begin, int64_t end, Box& b) {
+            for (int64_t i = begin; i < end; ++i)
+                for (int d = 0; d < 3; ++d) b.lo[d] = std::min(b.lo[d], x[3 * i + d]), b.hi[d] = std::max(b.hi[d], x[3 * i + d]);
+        },
+        [](Box& total, const Box& b) {
+            for (int d = 0; d < 3; ++d) total.lo[d] = std::min(total.lo[d], b.lo[d]), total.hi[d] = std::max(total.hi[d], b.hi[d]);
+        });
+    for (int d = 0; d < 3; ++d) centre[d] = 0.5f * box.lo[d] + 0.5f * box.hi[d];
 }
 
 // The values a filter starts from and what it does with its result, per vertex and coordinate: by default x's own,
