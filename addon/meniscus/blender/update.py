@@ -289,16 +289,11 @@ def _render_file(mesh, settings, path, key, arguments, wanted):
     return _show_reconstruction(mesh, settings, os.path.basename(path) + " (render, built ahead)", result)
 
 
-# The frame caches given build-ahead work by the current render (plain objects, no bpy): its end drops what is left.
-_render_ahead_caches = []
-
-
 def drop_render_build_ahead():
-    """The render ended or was cancelled: build-ahead work not yet started is dropped. Touches nothing of bpy, since
-    render_complete / render_cancel may run on the render thread."""
-    for frame_cache in _render_ahead_caches:
+    """The render ended or was cancelled: build-ahead work not yet started is dropped (only build-ahead queues work
+    during a render). Touches nothing of bpy, since render_complete / render_cancel may run on the render thread."""
+    for frame_cache in list(_memory.frames.values()):
         _prefetcher.forget(frame_cache)
-    _render_ahead_caches.clear()
 
 
 def build_next_render_frame(scene):
@@ -319,10 +314,7 @@ def build_next_render_frame(scene):
                 continue
             arguments = reconstruction_arguments(settings, for_render=True)
             wanted = cache.parse_attribute_names(settings.attribute_names)
-            frame_cache = _memory.frame_cache(obj.data.as_pointer())
-            _prefetcher.want(frame_cache, [_worker_job(lookup, arguments, wanted, settings)])
-            if frame_cache not in _render_ahead_caches:
-                _render_ahead_caches.append(frame_cache)
+            _prefetcher.want(_memory.frame_cache(obj.data.as_pointer()), [_worker_job(lookup, arguments, wanted, settings)])
         except Exception:  # not this frame's problem: the next frame change builds it itself and reports
             continue
 
