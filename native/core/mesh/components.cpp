@@ -36,8 +36,8 @@ std::vector<int32_t> component_labels(const TriMesh& mesh, int32_t* count, int t
     return labels;
 }
 
-std::vector<double> component_volumes(const TriMesh& mesh, const std::vector<int32_t>& labels, int32_t count, int threads) {
-    // Each component's smallest vertex, by an atomic minimum (the same vertex whatever the order).
+std::vector<int32_t> component_smallest_vertices(const std::vector<int32_t>& labels, int32_t count, int threads) {
+    // By an atomic minimum: the same vertex whatever the order.
     std::vector<std::atomic<int32_t>> smallest(static_cast<std::size_t>(count));
     for (auto& first : smallest) first.store(std::numeric_limits<int32_t>::max(), std::memory_order_relaxed);
     parallel_blocks(static_cast<int64_t>(labels.size()), threads, int64_t{1} << 14, [&](int64_t begin, int64_t end) {
@@ -50,13 +50,16 @@ std::vector<double> component_volumes(const TriMesh& mesh, const std::vector<int
     });
     std::vector<int32_t> reference(static_cast<std::size_t>(count));
     for (std::size_t c = 0; c < reference.size(); ++c) reference[c] = smallest[c].load(std::memory_order_relaxed);
+    return reference;
+}
+
+std::vector<double> component_volumes(const TriMesh& mesh, const std::vector<int32_t>& labels, int32_t count, int threads) {
+    const std::vector<int32_t> reference = component_smallest_vertices(labels, count, threads);
     const float* vertices = mesh.vertices.data();
     const int32_t* tris = mesh.triangles.data();
     return sum_per_component(mesh, labels, count, threads, [&](int64_t t) {
         const int32_t* tri = tris + 3 * t;
-        const Vec3d origin = vertex_position(vertices, reference[labels[tri[0]]]);
-        return tetrahedron_volume(vertex_position(vertices, tri[0]) - origin, vertex_position(vertices, tri[1]) - origin,
-                                  vertex_position(vertices, tri[2]) - origin);
+        return component_volume_term(vertices, tri, reference[labels[tri[0]]]);
     });
 }
 

@@ -2,10 +2,12 @@
 // all. Used by volume restoration (post/volume.h) and the quality report (analysis/quality.h).
 #pragma once
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <vector>
 
 #include "base/parallel.h"
+#include "mesh/geometry.h"
 #include "mesh/mesh.h"
 
 namespace meniscus {
@@ -14,41 +16,64 @@ namespace meniscus {
 // deterministic) and their count. Unreferenced vertices get their own labels.
 std::vector<int32_t> component_labels(const TriMesh& mesh, int32_t* count, int threads = 1);
 
-// Per-component sums of value(t) over the triangles t, a triangle counting for the component of its first corner.
+// Per-component sums of W values per triangle, value(t) -> std::array<double, W>, over the triangles t, a triangle
+// counting for the component of its first corner; W sums per component, interleaved (component c's k-th at W c + k).
 // Triangles go in fixed blocks (independent of the thread count), each block sums into its own row in triangle
-// order and the rows are added in block order, so the result is the same bits for any thread count. With very many
-// components the rows would cost too much memory: then one sequential pass (also in triangle order).
-template <class Value>
-std::vector<double> sum_per_component(const TriMesh& mesh, const std::vector<int32_t>& labels, int32_t count, int threads,
-                                      const Value& value) {
+// order and the rows are added in block order, so the result is the same bits for any thread count (and each of the
+// W sums has the bits it would have alone). With very many components the rows would cost too much memory: then
+// fewer, longer blocks.
+template <int W, class Value>
+std::vector<double> sums_per_component(const TriMesh& mesh, const std::vector<int32_t>& labels, int32_t count, int threads,
+                                       const Value& value) {
     constexpr int64_t kBlock = int64_t(1) << 16;
     constexpr int64_t kMaxPartialSums = int64_t(1) << 22;  // 32 MiB of rows
     const int64_t triangles = static_cast<int64_t>(mesh.num_triangles());
-    auto component = [&](int64_t t) { return labels[mesh.triangles[3 * static_cast<std::size_t>(t)]]; };
-    const std::vector<double> zero(static_cast<std::size_t>(count), 0.0);
+    const int64_t width = int64_t{W} * count;
+    auto add = [&](int64_t t, std::vector<double>& row) {
+        const int64_t first = W * static_cast<int64_t>(labels[mesh.triangles[3 * static_cast<std::size_t>(t)]]);
+        const auto values = value(t);
+        for (int k = 0; k < W; ++k) row[first + k] += values[k];
+    };
+    const std::vector<double> zero(static_cast<std::size_t>(width), 0.0);
     int64_t block = kBlock;
     int64_t blocks = (triangles + block - 1) / block;
-    if (blocks * count > kMaxPartialSums) {
+    if (blocks * width > kMaxPartialSums) {
         // Many components (droplets of a large frame): fewer, longer blocks keep the rows within the cap, instead of
         // one serial pass (which was several serial passes over every triangle per volume correction at 4 M
         // particles). The blocks follow from the mesh alone, so the sums have the same bits at any thread count.
-        const int64_t most = kMaxPartialSums / std::max<int64_t>(count, 1);
+        const int64_t most = kMaxPartialSums / std::max<int64_t>(width, 1);
         block = most > 1 ? (triangles + most - 1) / most : triangles;
         blocks = (triangles + block - 1) / block;
     }
     if (blocks <= 1) {
         std::vector<double> total = zero;
-        for (int64_t t = 0; t < triangles; ++t) total[component(t)] += value(t);
+        for (int64_t t = 0; t < triangles; ++t) add(t, total);
         return total;
     }
     return ordered_block_reduce(
         triangles, threads, block, zero,
         [&](int64_t begin, int64_t end, std::vector<double>& row) {
-            for (int64_t t = begin; t < end; ++t) row[component(t)] += value(t);
+            for (int64_t t = begin; t < end; ++t) add(t, row);
         },
         [](std::vector<double>& total, const std::vector<double>& row) {
             for (std::size_t c = 0; c < total.size(); ++c) total[c] += row[c];
         });
+}
+
+// One value per triangle: sums_per_component with W = 1.
+template <class Value>
+std::vector<double> sum_per_component(const TriMesh& mesh, const std::vector<int32_t>& labels, int32_t count, int threads,
+                                      const Value& value) {
+    return sums_per_component<1>(mesh, labels, count, threads, [&](int64_t t) { return std::array<double, 1>{value(t)}; });
+}
+
+// Each component's smallest vertex (the origin its volume is measured from).
+std::vector<int32_t> component_smallest_vertices(const std::vector<int32_t>& labels, int32_t count, int threads);
+
+// Triangle tri's term of its component's signed volume, measured from the component's smallest vertex `origin`.
+inline double component_volume_term(const float* vertices, const int32_t* tri, int32_t origin) {
+    const Vec3d o = vertex_position(vertices, origin);
+    return tetrahedron_volume(vertex_position(vertices, tri[0]) - o, vertex_position(vertices, tri[1]) - o, vertex_position(vertices, tri[2]) - o);
 }
 
 // Signed enclosed volume per component (divergence theorem, in double), measured from each component's smallest

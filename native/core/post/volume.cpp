@@ -1,6 +1,7 @@
 #include "post/volume.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "base/parallel.h"
@@ -14,17 +15,19 @@ namespace {
 
 constexpr int64_t kVertexBlock = int64_t(1) << 16;
 
-// d volume_c / d s_c = sum of amount_i * A_i over the component's vertices, A_i a third of the incident triangle
-// areas: the rate at which an offset s_c * amount_i along the normals changes the component's volume.
-std::vector<double> volume_rates(const TriMesh& mesh, const UnsmoothedSurface& unsmoothed, const std::vector<float>& amount, int threads) {
+// Per component, interleaved: its signed volume (component_volumes' bits) and d volume / d s, the rate at which an
+// offset s * amount_i along the normals changes it: the sum of amount_i * A_i over its vertices, A_i a third of the
+// incident triangles' areas. One pass over the triangles for both (they were two per Newton step).
+std::vector<double> volumes_and_rates(const TriMesh& mesh, const std::vector<int32_t>& labels, int32_t count,
+                                      const std::vector<int32_t>& origin, const std::vector<float>& amount, int threads) {
     const float* vertices = mesh.vertices.data();
     const int32_t* tris = mesh.triangles.data();
-    return sum_per_component(mesh, unsmoothed.labels, unsmoothed.components, threads, [&](int64_t t) {
+    return sums_per_component<2>(mesh, labels, count, threads, [&](int64_t t) {
         const int32_t* tri = tris + 3 * t;
         const double third_area = length(triangle_cross(vertices, tri)) / 6.0;
-        double sum = 0.0;
-        for (int i = 0; i < 3; ++i) sum += third_area * (amount.empty() ? 1.0 : double(amount[tri[i]]));
-        return sum;
+        double rate = 0.0;
+        for (int i = 0; i < 3; ++i) rate += third_area * (amount.empty() ? 1.0 : double(amount[tri[i]]));
+        return std::array<double, 2>{component_volume_term(vertices, tri, origin[labels[tri[0]]]), rate};
     });
 }
 
@@ -61,19 +64,22 @@ SmoothedNormals restore_component_volumes(TriMesh& mesh, const MeshAdjacency& ad
     const int32_t count = unsmoothed.components;
     if (count == 0 || mesh.num_triangles() == 0) return normals;
     std::vector<double> applied(static_cast<std::size_t>(count), 0.0);
+    const std::vector<int32_t> origin = component_smallest_vertices(unsmoothed.labels, count, threads);
     for (int step = 0; step < newton_steps; ++step) {
-        const std::vector<double> volume = component_volumes(mesh, unsmoothed.labels, count, threads);
+        // One pass over the triangles per step: the rates come with the volumes (unused after the last step).
+        const std::vector<double> sums = volumes_and_rates(mesh, unsmoothed.labels, count, origin, amount, threads);
+        auto volume = [&](int32_t c) { return sums[2 * static_cast<std::size_t>(c)]; };
+        auto rate = [&](int32_t c) { return sums[2 * static_cast<std::size_t>(c) + 1]; };
         // Within a few millionths (usually after the first step): a further step changes nothing worth its passes.
         bool converged = true;
         for (int32_t c = 0; c < count && converged; ++c)
-            converged = std::fabs(target[c] - volume[c]) <= 1e-5 * std::fabs(target[c]);
+            converged = std::fabs(target[c] - volume(c)) <= 1e-5 * std::fabs(target[c]);
         if (converged) break;
-        const std::vector<double> rate = volume_rates(mesh, unsmoothed, amount, threads);
         std::vector<double> offset(static_cast<std::size_t>(count), 0.0);
         bool any = false;
         for (int32_t c = 0; c < count; ++c) {
-            if (!(rate[c] > 0.0)) continue;
-            double s = (target[c] - volume[c]) / rate[c];
+            if (!(rate(c) > 0.0)) continue;
+            double s = (target[c] - volume(c)) / rate(c);
             // Cap the accumulated offset: a component that smoothing collapsed is not blown back up from nothing.
             s = std::min(std::max(applied[c] + s, -max_offset), max_offset) - applied[c];
             if (!std::isfinite(s)) continue;
