@@ -214,7 +214,7 @@ PipelineResult run_pipeline(const PositionsView& positions, const std::vector<At
     }
 
     // The last line of defence for the host application (post/vertex_guard.h).
-    const std::size_t clamped = keep_vertices_near_particles(mesh, reconstruction.grid, surface.compact_support() + 2.0 * surface.cube_edge());
+    const std::size_t clamped = keep_vertices_near_particles(mesh, reconstruction.grid, surface.compact_support() + 2.0 * surface.cube_edge(), threads);
     if (clamped > 0)
         stats.warnings.push_back("internal: " + std::to_string(clamped) + " vertices were outside the particles' reach and were clamped");
     stats.set_count("vertices", static_cast<double>(mesh.num_vertices()));

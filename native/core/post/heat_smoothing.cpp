@@ -9,6 +9,7 @@
 #include <type_traits>
 #include <utility>
 
+#include "base/bounding_box.h"
 #include "base/errors.h"
 #include "base/numbers.h"
 #include "base/parallel.h"
@@ -177,20 +178,7 @@ void chebyshev_term(bool accumulate, const UmbrellaRows& rows, const float* step
 
 // The centre of the bounding box of 3 floats per vertex.
 void bounding_box_centre(const std::vector<float>& x, int threads, float centre[3]) {
-    const int64_t nv = static_cast<int64_t>(x.size() / 3);
-    // The box in fixed blocks folded in order: the serial loop's bits (down to which of +0 and -0 it keeps).
-    struct Box {
-        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    };
-    const Box box = ordered_block_reduce(
-        nv, threads, 16 * kBlock, Box{},
-        [&](int64_t begin, int64_t end, Box& b) {
-            for (int64_t i = begin; i < end; ++i)
-                for (int d = 0; d < 3; ++d) b.lo[d] = std::min(b.lo[d], x[3 * i + d]), b.hi[d] = std::max(b.hi[d], x[3 * i + d]);
-        },
-        [](Box& total, const Box& b) {
-            for (int d = 0; d < 3; ++d) total.lo[d] = std::min(total.lo[d], b.lo[d]), total.hi[d] = std::max(total.hi[d], b.hi[d]);
-        });
+    const FloatBox box = bounding_box(x.data(), static_cast<int64_t>(x.size() / 3), threads);
     for (int d = 0; d < 3; ++d) centre[d] = 0.5f * box.lo[d] + 0.5f * box.hi[d];
 }
 
@@ -389,13 +377,15 @@ ReturnAggregates return_aggregates(const TriMesh& mesh, const MeshAdjacency& adj
     parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t i = begin; i < end; ++i) r.valence[i] = static_cast<float>(adjacency.vertex_neighbours.size(i));
     });
-    r.density.assign(g.size(), 0.0);
-    for (std::size_t a = 0; a < g.size(); ++a) {
-        double mass = 0.0, degree = 0.0;
-        for (int64_t k = g.members.begin(a); k < g.members.end(a); ++k) mass += r.valence[g.members.items[k]];
-        for (int64_t k = g.neighbours.begin(a); k < g.neighbours.end(a); ++k) degree += g.coupling[k];
-        r.density[a] = degree > 0.0 ? mass / degree : 0.0;
-    }
+    r.density.resize(g.size());
+    parallel_blocks(static_cast<int64_t>(g.size()), threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t a = begin; a < end; ++a) {
+            double mass = 0.0, degree = 0.0;
+            for (int64_t k = g.members.begin(a); k < g.members.end(a); ++k) mass += r.valence[g.members.items[k]];
+            for (int64_t k = g.neighbours.begin(a); k < g.neighbours.end(a); ++k) degree += g.coupling[k];
+            r.density[a] = degree > 0.0 ? mass / degree : 0.0;
+        }
+    });
     if (g.size() == 0) return r;  // the scene spans too many cells for the keys: the return low-passes on the mesh
     r.centre = restrict_to_aggregates(g, areas, mesh.vertices.data(), 3, threads);
     r.coarse_edge = rms_coupled_distance(g, r.centre, threads);

@@ -6,6 +6,7 @@
 #include <type_traits>
 #include <utility>
 
+#include "base/bounding_box.h"
 #include "base/compaction.h"
 #include "base/concurrent_disjoint_sets.h"
 #include "base/errors.h"
@@ -46,12 +47,8 @@ SurfaceAggregates aggregate_surface(const TriMesh& mesh, const MeshAdjacency& ad
     SurfaceAggregates g;
     if (nv == 0) return g;
 
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int64_t i = 0; i < nv; ++i)
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = std::min(lo[k], double(mesh.vertices[3 * i + k]));
-            hi[k] = std::max(hi[k], double(mesh.vertices[3 * i + k]));
-        }
+    const FloatBox box = bounding_box(mesh.vertices.data(), nv, threads);
+    const double lo[3] = {box.lo[0], box.lo[1], box.lo[2]}, hi[3] = {box.hi[0], box.hi[1], box.hi[2]};
     for (int k = 0; k < 3; ++k)
         if (!((hi[k] - lo[k]) / cell < 2097151.0)) return g;  // beyond the keys' 21 bits (or not finite)
     // Cell coordinates packed in one integer, 21 bits each.

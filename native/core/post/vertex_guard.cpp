@@ -3,29 +3,26 @@
 #include <algorithm>
 #include <cmath>
 
+#include "base/bounding_box.h"
+#include "base/parallel.h"
+
 namespace meniscus {
 
-std::size_t keep_vertices_near_particles(TriMesh& mesh, const ParticleGrid& particles, double margin_length) {
+std::size_t keep_vertices_near_particles(TriMesh& mesh, const ParticleGrid& particles, double margin_length, int threads) {
     if (particles.size() == 0) return 0;
-    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (std::size_t j = 0; j < particles.size(); ++j)
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = std::min(lo[k], particles.position(j)[k]);
-            hi[k] = std::max(hi[k], particles.position(j)[k]);
-        }
+    const FloatBox box = bounding_box(particles.positions().data(), static_cast<int64_t>(particles.size()), threads);
     const float margin = static_cast<float>(margin_length);
-    std::size_t repaired = 0;
-    for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
+    const std::size_t repaired = parallel_count(static_cast<int64_t>(mesh.num_vertices()), threads, [&](int64_t v) {
         bool bad = false;
         for (int k = 0; k < 3; ++k) {
             float& x = mesh.vertices[3 * v + k];
-            if (!std::isfinite(x) || x < lo[k] - margin || x > hi[k] + margin) {
+            if (!std::isfinite(x) || x < box.lo[k] - margin || x > box.hi[k] + margin) {
                 bad = true;
-                x = std::isfinite(x) ? std::min(std::max(x, lo[k] - margin), hi[k] + margin) : 0.5f * (lo[k] + hi[k]);
+                x = std::isfinite(x) ? std::min(std::max(x, box.lo[k] - margin), box.hi[k] + margin) : 0.5f * (box.lo[k] + box.hi[k]);
             }
         }
-        repaired += bad;
-    }
+        return bad;
+    });
     for (float& n : mesh.normals)
         if (!std::isfinite(n)) n = 0.0f;
     return repaired;

@@ -11,6 +11,6 @@ namespace meniscus {
 
 // Clamps every vertex coordinate into the particles' bounding box grown by `margin` (a non-finite one to the box's
 // centre) and zeroes non-finite normals. Returns the number of vertices moved; nothing without particles.
-std::size_t keep_vertices_near_particles(TriMesh& mesh, const ParticleGrid& particles, double margin);
+std::size_t keep_vertices_near_particles(TriMesh& mesh, const ParticleGrid& particles, double margin, int threads);
 
 }  // namespace meniscus
