@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <deque>
 #include <cmath>
 #include <string>
 #include <type_traits>
@@ -49,6 +50,19 @@ struct HeatFilterWorkspace {
         if (storage.size() < n) storage = UninitializedVector<float>(n);
         return storage.data();
     }
+    // heat_coefficients(n, tolerance), each pair computed once per smoothing: every part's filters ask for the same
+    // few (~1000 cosines each, serial, while the other threads wait).
+    const std::vector<double>& coefficients(double n, double tolerance) {
+        for (const Coefficients& known : cache)
+            if (known.n == n && known.tolerance == tolerance) return known.values;
+        cache.push_back({n, tolerance, heat_coefficients(n, tolerance)});
+        return cache.back().values;
+    }
+    struct Coefficients {
+        double n, tolerance;
+        std::vector<double> values;
+    };
+    std::deque<Coefficients> cache;  // a deque: references to its elements stay valid as it grows
     // The point positions are taken relative to (a smoothing's parts: its bounding box's centre, found once; a filter
     // alone finds its own).
     bool has_centre = false;
@@ -189,6 +203,12 @@ struct ReadValues {
     const float* x;
     float operator()(int64_t i, int d, int dims) const { return x[dims * i + d]; }
 };
+// x's own values, each also copied to `kept` as it is read (a part's start, for its return: no pass of its own).
+struct ReadAndKeepValues {
+    const float* x;
+    float* kept;
+    float operator()(int64_t i, int d, int dims) const { return kept[dims * i + d] = x[dims * i + d]; }
+};
 struct WriteValues {
     float* x;
     void operator()(int64_t i, int d, int dims, float value) const { x[dims * i + d] = value; }
@@ -242,22 +262,10 @@ int chebyshev_apply(std::vector<float>& x, const UmbrellaRows& rows, const std::
                     t_older[D * i + d] = t;
                     acc[D * i + d] = c0 * t;
                 }
-        // Term k is added together with term k - 1 when k is even, alone when it is the last and odd.
-#pragma omp for schedule(dynamic, 1)
-        for (int64_t b = 0; b < blocks; ++b)
-            chebyshev_term<D, true, FROZEN>(degree == 1, rows, steps.data(), frozen, t_older, t_current, acc, 0.0f, coefficient(1),
-                                            b * kBlock, std::min(nv, (b + 1) * kBlock));
-        for (int k = 2; k <= degree; ++k) {
-            const bool even = k % 2 == 0;
-#pragma omp for schedule(dynamic, 1)
-            for (int64_t b = 0; b < blocks; ++b)
-                chebyshev_term<D, false, FROZEN>(even || k == degree, rows, steps.data(), frozen, t_current, t_older, acc,
-                                                 even ? coefficient(k - 1) : 0.0f, coefficient(k), b * kBlock, std::min(nv, (b + 1) * kBlock));
-            std::swap(t_older, t_current);
-        }
-#pragma omp for schedule(dynamic, 1)
-        for (int64_t b = 0; b < blocks; ++b)
-            for (int64_t i = b * kBlock, end = std::min(nv, (b + 1) * kBlock); i < end; ++i) {
+        // The result of each block as soon as its last term is in: a vertex's result reads only its own sum (and the
+        // terms read no x), so this needs no barrier of its own.
+        auto finish_block = [&](int64_t begin, int64_t end) {
+            for (int64_t i = begin; i < end; ++i) {
                 if (steps[i] == 0.0f) {  // not moved: keeps its bits
                     if constexpr (!std::is_same<Start, ReadValues>::value)
                         for (int d = 0; d < D; ++d) finish(i, d, D, start(i, d, D));
@@ -265,15 +273,46 @@ int chebyshev_apply(std::vector<float>& x, const UmbrellaRows& rows, const std::
                 }
                 for (int d = 0; d < D; ++d) finish(i, d, D, centre_of[d] + acc[D * i + d]);
             }
+        };
+        // Term k is added together with term k - 1 when k is even, alone when it is the last and odd.
+#pragma omp for schedule(dynamic, 1)
+        for (int64_t b = 0; b < blocks; ++b) {
+            const int64_t begin = b * kBlock, end = std::min(nv, (b + 1) * kBlock);
+            chebyshev_term<D, true, FROZEN>(degree == 1, rows, steps.data(), frozen, t_older, t_current, acc, 0.0f, coefficient(1), begin, end);
+            if (degree == 1) finish_block(begin, end);
+        }
+        for (int k = 2; k <= degree; ++k) {
+            const bool even = k % 2 == 0;
+#pragma omp for schedule(dynamic, 1)
+            for (int64_t b = 0; b < blocks; ++b) {
+                const int64_t begin = b * kBlock, end = std::min(nv, (b + 1) * kBlock);
+                chebyshev_term<D, false, FROZEN>(even || k == degree, rows, steps.data(), frozen, t_current, t_older, acc,
+                                                 even ? coefficient(k - 1) : 0.0f, coefficient(k), begin, end);
+                if (k == degree) finish_block(begin, end);
+            }
+            std::swap(t_older, t_current);
+        }
     }
     return degree;
 }
 
-// heat_filter on rows and steps made once for several filters.
+// heat_filter on rows and steps made once for several filters. kept: when given, receives x as it was (dims floats
+// per vertex).
 int chebyshev_filter(std::vector<float>& x, int dims, const UmbrellaRows& rows, const std::vector<float>& steps, double n, double tolerance,
-                     int threads, const uint8_t* frozen, HeatFilterWorkspace& workspace) {
-    const std::vector<double> c = heat_coefficients(n, tolerance);
-    if (c.size() < 2 || steps.empty()) return 0;
+                     int threads, const uint8_t* frozen, HeatFilterWorkspace& workspace, float* kept = nullptr) {
+    const std::vector<double>& c = workspace.coefficients(n, tolerance);
+    if (c.size() < 2 || steps.empty()) {
+        if (kept) std::copy(x.begin(), x.end(), kept);
+        return 0;
+    }
+    if (kept) {
+        const ReadAndKeepValues start{x.data(), kept};
+        if (dims == 3)
+            return frozen ? chebyshev_apply<3, true>(x, rows, steps, frozen, c, threads, workspace, start)
+                          : chebyshev_apply<3, false>(x, rows, steps, nullptr, c, threads, workspace, start);
+        return frozen ? chebyshev_apply<1, true>(x, rows, steps, frozen, c, threads, workspace, start)
+                      : chebyshev_apply<1, false>(x, rows, steps, nullptr, c, threads, workspace, start);
+    }
     if (dims == 3)
         return frozen ? chebyshev_apply<3, true>(x, rows, steps, frozen, c, threads, workspace)
                       : chebyshev_apply<3, false>(x, rows, steps, nullptr, c, threads, workspace);
@@ -299,8 +338,8 @@ void require_valid_walls(const WallConstraints& walls, std::size_t vertex_count)
 // Unit area-weighted vertex normals and, when `areas` is given, vertex areas (a third of the incident triangles'
 // areas). Every part's return needs them: float cross products (the normals only set the return's direction, and the
 // edges of one triangle are of one size), each triangle's once into the workspace (free between the filters), then
-// gathered per vertex in its vertex -> triangle row's order. Crossing per corner instead
-// reads three vertices three times for every triangle (0.115 -> 0.05 CPU-s per return at 1 M particles).
+// gathered per vertex in its vertex -> triangle row's order (crossing per corner read three vertices three times
+// for every triangle: 0.115 -> 0.05 CPU-s per return at 1 M particles).
 void vertex_normals(const TriMesh& mesh, const MeshAdjacency& adjacency, std::vector<float>& normals, std::vector<float>* areas,
                     HeatFilterWorkspace& workspace, int threads, const float* before = nullptr, std::vector<float>* offset = nullptr) {
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
@@ -310,45 +349,51 @@ void vertex_normals(const TriMesh& mesh, const MeshAdjacency& adjacency, std::ve
     if (areas) areas->resize(static_cast<std::size_t>(nv));
     float* const face_cross = workspace.scratch(static_cast<std::size_t>(3 * nt));
     const float* x = mesh.vertices.data();
-    parallel_blocks(nt, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t f = begin; f < end; ++f) {
-            const int32_t* t = mesh.triangles.data() + 3 * f;
-            const float *a = x + 3 * static_cast<int64_t>(t[0]), *b = x + 3 * static_cast<int64_t>(t[1]), *c = x + 3 * static_cast<int64_t>(t[2]);
-            const float u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-            const float w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-            float* n = face_cross + 3 * f;
-            n[0] = u[1] * w[2] - u[2] * w[1], n[1] = u[2] * w[0] - u[0] * w[2], n[2] = u[0] * w[1] - u[1] * w[0];
-            if (!std::isfinite(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])) n[0] = n[1] = n[2] = 0.0f;
-        }
-    });
-    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t v = begin; v < end; ++v) {
-            double sum[3] = {0.0, 0.0, 0.0}, area = 0.0;
-            for (int64_t k = vt.begin(v); k < vt.end(v); ++k) {
-                const float* n = face_cross + 3 * static_cast<int64_t>(vt.items[k]);
-                sum[0] += n[0], sum[1] += n[1], sum[2] += n[2];
-                if (areas) area += std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]) / 6.0;
+    // One parallel region for both loops (nothing in them throws): the returns run once per part, and at coarse cube
+    // sizes (15 parts on small meshes) each region's start counts where other programs hold cores.
+    const int64_t face_blocks = (nt + kBlock - 1) / kBlock, vertex_blocks = (nv + kBlock - 1) / kBlock;
+#pragma omp parallel num_threads(resolve_threads(threads))
+    {
+#pragma omp for schedule(dynamic, 1)
+        for (int64_t block = 0; block < face_blocks; ++block)
+            for (int64_t f = block * kBlock, end = std::min(nt, (block + 1) * kBlock); f < end; ++f) {
+                const int32_t* t = mesh.triangles.data() + 3 * f;
+                const float *a = x + 3 * static_cast<int64_t>(t[0]), *b = x + 3 * static_cast<int64_t>(t[1]), *c = x + 3 * static_cast<int64_t>(t[2]);
+                const float u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+                const float w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+                float* n = face_cross + 3 * f;
+                n[0] = u[1] * w[2] - u[2] * w[1], n[1] = u[2] * w[0] - u[0] * w[2], n[2] = u[0] * w[1] - u[1] * w[0];
+                if (!std::isfinite(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])) n[0] = n[1] = n[2] = 0.0f;
             }
-            double l = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
-            if (!(l > 0.0)) {  // opposite faces cancel (a sheet folded onto itself): the largest incident face's
-                double largest_norm = 0.0;
-                sum[0] = 0.0, sum[1] = 0.0, sum[2] = 1.0;
+#pragma omp for schedule(dynamic, 1)
+        for (int64_t block = 0; block < vertex_blocks; ++block)
+            for (int64_t v = block * kBlock, end = std::min(nv, (block + 1) * kBlock); v < end; ++v) {
+                double sum[3] = {0.0, 0.0, 0.0}, area = 0.0;
                 for (int64_t k = vt.begin(v); k < vt.end(v); ++k) {
                     const float* n = face_cross + 3 * static_cast<int64_t>(vt.items[k]);
-                    const double norm2 = double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2];
-                    if (norm2 > largest_norm) largest_norm = norm2, sum[0] = n[0], sum[1] = n[1], sum[2] = n[2];
+                    sum[0] += n[0], sum[1] += n[1], sum[2] += n[2];
+                    if (areas) area += std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]) / 6.0;
                 }
-                l = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+                double l = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+                if (!(l > 0.0)) {  // opposite faces cancel (a sheet folded onto itself): the largest incident face's
+                    double largest_norm = 0.0;
+                    sum[0] = 0.0, sum[1] = 0.0, sum[2] = 1.0;
+                    for (int64_t k = vt.begin(v); k < vt.end(v); ++k) {
+                        const float* n = face_cross + 3 * static_cast<int64_t>(vt.items[k]);
+                        const double norm2 = double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2];
+                        if (norm2 > largest_norm) largest_norm = norm2, sum[0] = n[0], sum[1] = n[1], sum[2] = n[2];
+                    }
+                    l = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+                }
+                for (int k = 0; k < 3; ++k) normals[3 * v + k] = static_cast<float>(sum[k] / l);
+                if (areas) (*areas)[v] = static_cast<float>(area);
+                if (offset) {  // the normal component of the move from `before`, while the normal is at hand
+                    float d = 0.0f;
+                    for (int k = 0; k < 3; ++k) d += (mesh.vertices[3 * v + k] - before[3 * v + k]) * normals[3 * v + k];
+                    (*offset)[v] = d;
+                }
             }
-            for (int k = 0; k < 3; ++k) normals[3 * v + k] = static_cast<float>(sum[k] / l);
-            if (areas) (*areas)[v] = static_cast<float>(area);
-            if (offset) {  // the normal component of the move from `before`, while the normal is at hand
-                float d = 0.0f;
-                for (int k = 0; k < 3; ++k) d += (mesh.vertices[3 * v + k] - before[3 * v + k]) * normals[3 * v + k];
-                (*offset)[v] = d;
-            }
-        }
-    });
+    }
 }
 
 // The surface's aggregates (post/surface_aggregates.h) with what the return's low-pass needs of them, built once per
@@ -395,7 +440,7 @@ ReturnAggregates return_aggregates(const TriMesh& mesh, const MeshAdjacency& adj
 // Values per aggregate (restricted as ReturnAggregates says) low-passed in place over `reach` on the aggregate graph:
 // the same heat kernel as the mesh's (its N from the aggregates' own coupled distance), as a normalised convolution.
 void coarse_low_pass(std::vector<double>& coarse, ReturnAggregates& coarse_surface, double reach, double tolerance, int threads,
-                     HeatSmoothingReport& report) {
+                     HeatSmoothingReport& report, HeatFilterWorkspace& workspace) {
     // A low-pass stays within the values it averages; the truncated series could overshoot where the denominator
     // below is small.
     double lowest = 0.0, highest = 0.0;
@@ -408,7 +453,7 @@ void coarse_low_pass(std::vector<double>& coarse, ReturnAggregates& coarse_surfa
     report.coarse_edge = coarse_edge;
     if (!(coarse_edge > 0.0)) return;
     const int64_t na = static_cast<int64_t>(aggregates.size());
-    const std::vector<double> c = heat_coefficients(std::min(std::pow(reach / coarse_edge, 2.0), kMaxIterations), tolerance);
+    const std::vector<double>& c = workspace.coefficients(std::min(std::pow(reach / coarse_edge, 2.0), kMaxIterations), tolerance);
     // The filtered density is the same every part: filtered once, on the first return.
     if (coarse_surface.filtered_density.empty()) {
         coarse_surface.filtered_density = coarse_surface.density;
@@ -453,8 +498,8 @@ int aggregate_return(std::vector<float>& offset, TriMesh& mesh, const std::vecto
                      const std::vector<float>& steps, ReturnAggregates& coarse_surface, double cell, double reach, double tolerance,
                      double edge, int threads, HeatSmoothingReport& report, HeatFilterWorkspace& workspace) {
     std::vector<double> coarse = restrict_to_aggregates(coarse_surface.aggregates, coarse_surface.valence, offset.data(), 1, threads);
-    coarse_low_pass(coarse, coarse_surface, reach, tolerance, threads, report);
-    const std::vector<double> c = heat_coefficients(std::min(std::pow(0.5 * cell / edge, 2.0), kMaxIterations), tolerance);
+    coarse_low_pass(coarse, coarse_surface, reach, tolerance, threads, report, workspace);
+    const std::vector<double>& c = workspace.coefficients(std::min(std::pow(0.5 * cell / edge, 2.0), kMaxIterations), tolerance);
     struct Prolonged {
         const std::vector<double>* coarse;
         const TriMesh* mesh;
@@ -623,8 +668,8 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     const double return_iterations = std::min(std::pow(local_scale / report.edge, 2.0), kMaxIterations);
     const double tolerance = settings.return_tolerance > 0.0 ? settings.return_tolerance : kReturnTolerance;
     std::vector<float> offset, normals, areas;
-    UninitializedVector<float> before;
-    if (settings.local_return) offset.resize(static_cast<std::size_t>(nv));
+    UninitializedVector<float> before;  // each part's start, written by its filter
+    if (settings.local_return) offset.resize(static_cast<std::size_t>(nv)), before.resize(mesh.vertices.size());
     // Aggregates for the return's low-pass (built once, from the first part's surface: the parts move vertices by a
     // fraction of a cell).
     const double aggregate_size = settings.aggregate_size >= 0.0 ? settings.aggregate_size : kAggregateCell;
@@ -644,9 +689,9 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     bounding_box_centre(mesh.vertices, threads, workspace.centre);  // the parts move the surface by a fraction of it
     workspace.has_centre = true;
     for (int part = 0; part < report.parts; ++part) {
-        if (settings.local_return) copy_in_parallel(mesh.vertices.data(), mesh.vertices.size(), before, threads);
         report.applications += chebyshev_filter(mesh.vertices, 3, flow_rows, flow_steps, report.iterations / report.parts, kPositionTolerance,
-                                                threads, walls ? frozen.data() : nullptr, workspace);
+                                                threads, walls ? frozen.data() : nullptr, workspace,
+                                                settings.local_return ? before.data() : nullptr);
         apply_walls(walls, mesh);
         report.seconds_flow += seconds_since(mark);
         if (!settings.local_return) continue;

@@ -186,40 +186,51 @@ int aggregate_chebyshev(std::vector<double>& x, int dims, const SurfaceAggregate
     }
     // y = Y t_in; FIRST: t_out = y, else t_out = 2 y - t_out (the older term, read first); acc += c_k t_out.
     // DIMS a compile-time count: the inner loops unroll (the same operations in the same order as a runtime count).
-    auto term = [&](auto dims_constant, const std::vector<double>& in, std::vector<double>& older_out, std::vector<double>& acc, double ck,
-                    bool first) {
+    auto term = [&](auto dims_constant, const double* in, double* older_out, double* acc, double ck, bool first, int64_t begin, int64_t end) {
         constexpr int DIMS = decltype(dims_constant)::value;
-        // A few thousand aggregates (coarse meshes, small frames) take less than a parallel region's start.
-        parallel_blocks(count, count > 4096 ? threads : 1, 1024, [&](int64_t begin, int64_t end) {
-            for (int64_t a = begin; a < end; ++a) {
-                double s[DIMS] = {}, total = 0.0;
-                for (int64_t k = g.neighbours.begin(a); k < g.neighbours.end(a); ++k) {
-                    const int64_t b = g.neighbours.items[k];
-                    total += g.coupling[k];
-                    for (int d = 0; d < DIMS; ++d) s[d] += g.coupling[k] * in[DIMS * b + d];
-                }
-                const double w = total > 0.0 ? (weights.empty() ? 1.0 : weights[a]) : 0.0;
-                for (int d = 0; d < DIMS; ++d) {
-                    const double own = in[DIMS * a + d];
-                    const double y = w > 0.0 ? own + w * (s[d] / total - own) : own;
-                    const double value = first ? y : 2.0 * y - older_out[DIMS * a + d];
-                    older_out[DIMS * a + d] = value;
-                    acc[DIMS * a + d] += ck * value;
-                }
+        for (int64_t a = begin; a < end; ++a) {
+            double s[DIMS] = {}, total = 0.0;
+            for (int64_t k = g.neighbours.begin(a); k < g.neighbours.end(a); ++k) {
+                const int64_t b = g.neighbours.items[k];
+                total += g.coupling[k];
+                for (int d = 0; d < DIMS; ++d) s[d] += g.coupling[k] * in[DIMS * b + d];
             }
-        });
+            const double w = total > 0.0 ? (weights.empty() ? 1.0 : weights[a]) : 0.0;
+            for (int d = 0; d < DIMS; ++d) {
+                const double own = in[DIMS * a + d];
+                const double y = w > 0.0 ? own + w * (s[d] / total - own) : own;
+                const double value = first ? y : 2.0 * y - older_out[DIMS * a + d];
+                older_out[DIMS * a + d] = value;
+                acc[DIMS * a + d] += ck * value;
+            }
+        }
     };
-    auto apply_term = [&](const std::vector<double>& in, std::vector<double>& older_out, std::vector<double>& acc, double ck, bool first) {
-        if (dims == 1) term(std::integral_constant<int, 1>{}, in, older_out, acc, ck, first);
-        else if (dims == 2) term(std::integral_constant<int, 2>{}, in, older_out, acc, ck, first);
-        else term(std::integral_constant<int, 3>{}, in, older_out, acc, ck, first);
+    auto term_block = [&](const double* in, double* older_out, double* acc, double ck, bool first, int64_t begin, int64_t end) {
+        if (dims == 1) term(std::integral_constant<int, 1>{}, in, older_out, acc, ck, first, begin, end);
+        else if (dims == 2) term(std::integral_constant<int, 2>{}, in, older_out, acc, ck, first, begin, end);
+        else term(std::integral_constant<int, 3>{}, in, older_out, acc, ck, first, begin, end);
     };
     std::vector<double> older = x, current(x.size()), acc(x.size());
     for (std::size_t i = 0; i < x.size(); ++i) acc[i] = c[0] * x[i];
-    apply_term(older, current, acc, c[1], true);
-    for (int k = 2; k <= degree; ++k) {
-        apply_term(current, older, acc, c[static_cast<std::size_t>(k)], false);
-        older.swap(current);
+    // All terms in one parallel region, a loop over fixed blocks per term (its closing barrier is all the
+    // synchronisation a term needs), as the mesh's filter does: a region per term counts where other programs hold
+    // cores. A few thousand aggregates (coarse meshes, small frames) take less than a barrier: one thread.
+    constexpr int64_t kTermBlock = 1024;
+    const int64_t blocks = (count + kTermBlock - 1) / kTermBlock;
+#pragma omp parallel num_threads(count > 4096 ? resolve_threads(threads) : 1)
+    {
+        double* t_older = older.data();
+        double* t_current = current.data();
+#pragma omp for schedule(dynamic, 1)
+        for (int64_t b = 0; b < blocks; ++b)
+            term_block(t_older, t_current, acc.data(), c[1], true, b * kTermBlock, std::min(count, (b + 1) * kTermBlock));
+        for (int k = 2; k <= degree; ++k) {
+#pragma omp for schedule(dynamic, 1)
+            for (int64_t b = 0; b < blocks; ++b)
+                term_block(t_current, t_older, acc.data(), c[static_cast<std::size_t>(k)], false, b * kTermBlock,
+                           std::min(count, (b + 1) * kTermBlock));
+            std::swap(t_older, t_current);
+        }
     }
     x.swap(acc);
     return degree;
