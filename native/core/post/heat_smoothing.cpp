@@ -38,6 +38,31 @@ double seconds_since(std::chrono::steady_clock::time_point& mark) {
     return s;
 }
 
+// A filter exp(N (Y - I)) as it is applied: its Chebyshev series (about 4 sqrt(N) terms), or, where that is longer, N
+// explicit steps. For the short filters of the coarse cube sizes' many parts (c = 1.0: N = 4.4 per part, a series of
+// 7 terms against 5 steps) and of the returns' blend (N ~ 1-2: 3-5 terms against 1-2 steps), ceil(N) steps of
+// Y_b = I + b w (mean - I), b = N / ceil(N) <= 1, are the same heat time for fewer applications: their response
+// (1 - b l)^ceil(N) matches exp(-N l) at the low frequencies l that shape the surface and still damps the high ones
+// (|1 - b l| < 1 on a triangle mesh's spectrum).
+struct HeatPolynomial {
+    std::vector<double> chebyshev;  // the series' coefficients when explicit_steps == 0
+    int explicit_steps = 0;
+    float step_size = 1.0f;  // b
+    int applications() const { return explicit_steps > 0 ? explicit_steps : static_cast<int>(chebyshev.size()) - 1; }
+};
+
+HeatPolynomial heat_polynomial(double n, double tolerance, bool allow_explicit) {
+    HeatPolynomial p;
+    p.chebyshev = heat_coefficients(n, tolerance);
+    const double steps = std::ceil(n);
+    if (allow_explicit && n > 0.0 && steps < static_cast<double>(p.chebyshev.size()) - 1.0) {
+        p.chebyshev.clear();
+        p.explicit_steps = static_cast<int>(steps);
+        p.step_size = static_cast<float>(n / steps);
+    }
+    return p;
+}
+
 // The Chebyshev recurrence's three vectors, kept across the filters of one smoothing (a few tens of MB each at a
 // million vertices: allocated once, their pages are not faulted in again by every filter), in one buffer that the
 // returns' normals borrow between filters for their per-triangle cross products (so those add nothing to the memory
@@ -50,19 +75,20 @@ struct HeatFilterWorkspace {
         if (storage.size() < n) storage = UninitializedVector<float>(n);
         return storage.data();
     }
-    // heat_coefficients(n, tolerance), each pair computed once per smoothing: every part's filters ask for the same
-    // few (~1000 cosines each, serial, while the other threads wait).
-    const std::vector<double>& coefficients(double n, double tolerance) {
-        for (const Coefficients& known : cache)
-            if (known.n == n && known.tolerance == tolerance) return known.values;
-        cache.push_back({n, tolerance, heat_coefficients(n, tolerance)});
-        return cache.back().values;
+    // The polynomial of each (n, tolerance) a smoothing's filters ask for, made once: every part's filters ask for the
+    // same few (~1000 cosines each, serial, while the other threads wait).
+    const HeatPolynomial& polynomial(double n, double tolerance, bool allow_explicit) {
+        for (const Known& known : cache)
+            if (known.n == n && known.tolerance == tolerance && known.allow_explicit == allow_explicit) return known.polynomial;
+        cache.push_back({n, tolerance, allow_explicit, heat_polynomial(n, tolerance, allow_explicit)});
+        return cache.back().polynomial;
     }
-    struct Coefficients {
+    struct Known {
         double n, tolerance;
-        std::vector<double> values;
+        bool allow_explicit;
+        HeatPolynomial polynomial;
     };
-    std::deque<Coefficients> cache;  // a deque: references to its elements stay valid as it grows
+    std::deque<Known> cache;  // a deque: references to its elements stay valid as it grows
     // The point positions are taken relative to (a smoothing's parts: its bounding box's centre, found once; a filter
     // alone finds its own).
     bool has_centre = false;
@@ -190,6 +216,20 @@ void chebyshev_term(bool accumulate, const UmbrellaRows& rows, const float* step
         chebyshev_term<D, FIRST, FROZEN, false>(rows, steps, frozen, in, older_out, acc, c_in, c_out, begin, end);
 }
 
+// One explicit step on vertices [begin, end): out = Y_b in, Y_b = I + b w (mean - I) per vertex; coordinates set in
+// `frozen` are left as they are. With b = 1 the arithmetic of the series' Y.
+template <int D, bool FROZEN>
+void explicit_step(const UmbrellaRows& rows, const float* steps, const uint8_t* frozen, float step_size, const float* in, float* out,
+                   int64_t begin, int64_t end) {
+    for (int64_t i = begin; i < end; ++i) {
+        const float* xi = in + D * i;
+        float s[D];
+        umbrella_sum<D>(rows, i, in, s);
+        const float step = step_size * steps[i];
+        for (int d = 0; d < D; ++d) out[D * i + d] = FROZEN && (frozen[i] >> d & 1u) ? xi[d] : xi[d] + step * s[d];
+    }
+}
+
 // The centre of the bounding box of 3 floats per vertex.
 void bounding_box_centre(const std::vector<float>& x, int threads, float centre[3]) {
     const FloatBox box = bounding_box(x.data(), static_cast<int64_t>(x.size() / 3), threads);
@@ -215,13 +255,15 @@ struct WriteValues {
 };
 
 template <int D, bool FROZEN, class Start = ReadValues, class Finish = WriteValues>
-int chebyshev_apply(std::vector<float>& x, const UmbrellaRows& rows, const std::vector<float>& steps, const uint8_t* frozen,
-                    const std::vector<double>& c, int threads, HeatFilterWorkspace& workspace, Start start = Start{nullptr},
-                    Finish finish = Finish{nullptr}) {
+int apply_heat_polynomial(std::vector<float>& x, const UmbrellaRows& rows, const std::vector<float>& steps, const uint8_t* frozen,
+                          const HeatPolynomial& polynomial, int threads, HeatFilterWorkspace& workspace, Start start = Start{nullptr},
+                          Finish finish = Finish{nullptr}) {
     if constexpr (std::is_same<Start, ReadValues>::value) start.x = x.data();
     if constexpr (std::is_same<Finish, WriteValues>::value) finish.x = x.data();
     const int64_t nv = static_cast<int64_t>(steps.size());
-    const int degree = static_cast<int>(c.size()) - 1;
+    const std::vector<double>& c = polynomial.chebyshev;
+    const int explicit_steps = polynomial.explicit_steps;
+    const int degree = explicit_steps > 0 ? 0 : static_cast<int>(c.size()) - 1;
     // Positions relative to the centre of their bounding box (small numbers wherever the mesh lies); the result is a
     // convex combination of the terms (the heat kernel's coefficients are positive), accumulated directly: no stream
     // of the start values is needed inside the loop.
@@ -241,7 +283,7 @@ int chebyshev_apply(std::vector<float>& x, const UmbrellaRows& rows, const std::
     float* const current = older + stride;
     float* const acc = current + stride;
     older[x.size()] = 0.0f, current[x.size()] = 0.0f;
-    const float c0 = static_cast<float>(c[0]);
+    const float c0 = degree > 0 ? static_cast<float>(c[0]) : 1.0f;
     auto coefficient = [&](int k) { return static_cast<float>(c[static_cast<std::size_t>(k)]); };
     // All terms in one parallel region, a loop over fixed blocks per term: the barrier closing each loop (a term
     // reads its neighbours' previous terms) is all the synchronisation, instead of a region started and joined per
@@ -260,64 +302,76 @@ int chebyshev_apply(std::vector<float>& x, const UmbrellaRows& rows, const std::
                 for (int d = 0; d < D; ++d) {
                     const float t = start(i, d, D) - centre_of[d];
                     t_older[D * i + d] = t;
-                    acc[D * i + d] = c0 * t;
+                    if (explicit_steps == 0) acc[D * i + d] = c0 * t;
                 }
         // The result of each block as soon as its last term is in: a vertex's result reads only its own sum (and the
         // terms read no x), so this needs no barrier of its own.
-        auto finish_block = [&](int64_t begin, int64_t end) {
+        auto finish_block = [&](const float* result, int64_t begin, int64_t end) {
             for (int64_t i = begin; i < end; ++i) {
                 if (steps[i] == 0.0f) {  // not moved: keeps its bits
                     if constexpr (!std::is_same<Start, ReadValues>::value)
                         for (int d = 0; d < D; ++d) finish(i, d, D, start(i, d, D));
                     continue;
                 }
-                for (int d = 0; d < D; ++d) finish(i, d, D, centre_of[d] + acc[D * i + d]);
+                for (int d = 0; d < D; ++d) finish(i, d, D, centre_of[d] + result[D * i + d]);
             }
         };
-        // Term k is added together with term k - 1 when k is even, alone when it is the last and odd.
-#pragma omp for schedule(dynamic, 1)
-        for (int64_t b = 0; b < blocks; ++b) {
-            const int64_t begin = b * kBlock, end = std::min(nv, (b + 1) * kBlock);
-            chebyshev_term<D, true, FROZEN>(degree == 1, rows, steps.data(), frozen, t_older, t_current, acc, 0.0f, coefficient(1), begin, end);
-            if (degree == 1) finish_block(begin, end);
-        }
-        for (int k = 2; k <= degree; ++k) {
-            const bool even = k % 2 == 0;
+        for (int k = 1; k <= explicit_steps; ++k) {
 #pragma omp for schedule(dynamic, 1)
             for (int64_t b = 0; b < blocks; ++b) {
                 const int64_t begin = b * kBlock, end = std::min(nv, (b + 1) * kBlock);
-                chebyshev_term<D, false, FROZEN>(even || k == degree, rows, steps.data(), frozen, t_current, t_older, acc,
-                                                 even ? coefficient(k - 1) : 0.0f, coefficient(k), begin, end);
-                if (k == degree) finish_block(begin, end);
+                explicit_step<D, FROZEN>(rows, steps.data(), frozen, polynomial.step_size, t_older, t_current, begin, end);
+                if (k == explicit_steps) finish_block(t_current, begin, end);
             }
             std::swap(t_older, t_current);
         }
+        // Term k is added together with term k - 1 when k is even, alone when it is the last and odd.
+        if (degree > 0) {
+#pragma omp for schedule(dynamic, 1)
+            for (int64_t b = 0; b < blocks; ++b) {
+                const int64_t begin = b * kBlock, end = std::min(nv, (b + 1) * kBlock);
+                chebyshev_term<D, true, FROZEN>(degree == 1, rows, steps.data(), frozen, t_older, t_current, acc, 0.0f, coefficient(1), begin, end);
+                if (degree == 1) finish_block(acc, begin, end);
+            }
+            for (int k = 2; k <= degree; ++k) {
+                const bool even = k % 2 == 0;
+#pragma omp for schedule(dynamic, 1)
+                for (int64_t b = 0; b < blocks; ++b) {
+                    const int64_t begin = b * kBlock, end = std::min(nv, (b + 1) * kBlock);
+                    chebyshev_term<D, false, FROZEN>(even || k == degree, rows, steps.data(), frozen, t_current, t_older, acc,
+                                                     even ? coefficient(k - 1) : 0.0f, coefficient(k), begin, end);
+                    if (k == degree) finish_block(acc, begin, end);
+                }
+                std::swap(t_older, t_current);
+            }
+        }
     }
-    return degree;
+    return polynomial.applications();
 }
 
-// heat_filter on rows and steps made once for several filters. kept: when given, receives x as it was (dims floats
-// per vertex).
-int chebyshev_filter(std::vector<float>& x, int dims, const UmbrellaRows& rows, const std::vector<float>& steps, double n, double tolerance,
-                     int threads, const uint8_t* frozen, HeatFilterWorkspace& workspace, float* kept = nullptr) {
-    const std::vector<double>& c = workspace.coefficients(n, tolerance);
-    if (c.size() < 2 || steps.empty()) {
+// heat_filter on rows and steps made once for several filters; allow_explicit: explicit steps where they are shorter
+// than the series (HeatPolynomial). kept: when given, receives x as it was (dims floats per vertex).
+int heat_filter_on_rows(std::vector<float>& x, int dims, const UmbrellaRows& rows, const std::vector<float>& steps, double n,
+                        double tolerance, bool allow_explicit, int threads, const uint8_t* frozen, HeatFilterWorkspace& workspace,
+                        float* kept = nullptr) {
+    const HeatPolynomial& p = workspace.polynomial(n, tolerance, allow_explicit);
+    if (p.applications() < 1 || steps.empty()) {
         if (kept) std::copy(x.begin(), x.end(), kept);
         return 0;
     }
     if (kept) {
         const ReadAndKeepValues start{x.data(), kept};
         if (dims == 3)
-            return frozen ? chebyshev_apply<3, true>(x, rows, steps, frozen, c, threads, workspace, start)
-                          : chebyshev_apply<3, false>(x, rows, steps, nullptr, c, threads, workspace, start);
-        return frozen ? chebyshev_apply<1, true>(x, rows, steps, frozen, c, threads, workspace, start)
-                      : chebyshev_apply<1, false>(x, rows, steps, nullptr, c, threads, workspace, start);
+            return frozen ? apply_heat_polynomial<3, true>(x, rows, steps, frozen, p, threads, workspace, start)
+                          : apply_heat_polynomial<3, false>(x, rows, steps, nullptr, p, threads, workspace, start);
+        return frozen ? apply_heat_polynomial<1, true>(x, rows, steps, frozen, p, threads, workspace, start)
+                      : apply_heat_polynomial<1, false>(x, rows, steps, nullptr, p, threads, workspace, start);
     }
     if (dims == 3)
-        return frozen ? chebyshev_apply<3, true>(x, rows, steps, frozen, c, threads, workspace)
-                      : chebyshev_apply<3, false>(x, rows, steps, nullptr, c, threads, workspace);
-    return frozen ? chebyshev_apply<1, true>(x, rows, steps, frozen, c, threads, workspace)
-                  : chebyshev_apply<1, false>(x, rows, steps, nullptr, c, threads, workspace);
+        return frozen ? apply_heat_polynomial<3, true>(x, rows, steps, frozen, p, threads, workspace)
+                      : apply_heat_polynomial<3, false>(x, rows, steps, nullptr, p, threads, workspace);
+    return frozen ? apply_heat_polynomial<1, true>(x, rows, steps, frozen, p, threads, workspace)
+                  : apply_heat_polynomial<1, false>(x, rows, steps, nullptr, p, threads, workspace);
 }
 
 // Most parts the flow may run in (each a filter and a return over the whole mesh).
@@ -453,7 +507,7 @@ void coarse_low_pass(std::vector<double>& coarse, ReturnAggregates& coarse_surfa
     report.coarse_edge = coarse_edge;
     if (!(coarse_edge > 0.0)) return;
     const int64_t na = static_cast<int64_t>(aggregates.size());
-    const std::vector<double>& c = workspace.coefficients(std::min(std::pow(reach / coarse_edge, 2.0), kMaxIterations), tolerance);
+    const std::vector<double>& c = workspace.polynomial(std::min(std::pow(reach / coarse_edge, 2.0), kMaxIterations), tolerance, false).chebyshev;
     // The filtered density is the same every part: filtered once, on the first return.
     if (coarse_surface.filtered_density.empty()) {
         coarse_surface.filtered_density = coarse_surface.density;
@@ -499,7 +553,7 @@ int aggregate_return(std::vector<float>& offset, TriMesh& mesh, const std::vecto
                      double edge, int threads, HeatSmoothingReport& report, HeatFilterWorkspace& workspace) {
     std::vector<double> coarse = restrict_to_aggregates(coarse_surface.aggregates, coarse_surface.valence, offset.data(), 1, threads);
     coarse_low_pass(coarse, coarse_surface, reach, tolerance, threads, report, workspace);
-    const std::vector<double>& c = workspace.coefficients(std::min(std::pow(0.5 * cell / edge, 2.0), kMaxIterations), tolerance);
+    const HeatPolynomial& blend = workspace.polynomial(std::min(std::pow(0.5 * cell / edge, 2.0), kMaxIterations), tolerance, true);
     struct Prolonged {
         const std::vector<double>* coarse;
         const TriMesh* mesh;
@@ -516,7 +570,7 @@ int aggregate_return(std::vector<float>& offset, TriMesh& mesh, const std::vecto
         }
     };
     // offset only sizes the filter from here on: Prolonged and MoveBack are its values.
-    return chebyshev_apply<1, false>(offset, rows, steps, nullptr, c, threads, workspace, Prolonged{&coarse, &mesh, &coarse_surface, cell},
+    return apply_heat_polynomial<1, false>(offset, rows, steps, nullptr, blend, threads, workspace, Prolonged{&coarse, &mesh, &coarse_surface, cell},
                                      MoveBack{mesh.vertices.data(), normals.data()});
 }
 
@@ -590,7 +644,7 @@ int heat_filter(std::vector<float>& x, int dims, const MeshAdjacency& adjacency,
     if (frozen && !frozen->empty() && frozen->size() != nv) throw InputError("heat_filter: one wall mask per vertex expected");
     if (heat_coefficients(n, tolerance).size() < 2 || nv == 0) return 0;
     HeatFilterWorkspace workspace;
-    return chebyshev_filter(x, dims, umbrella_rows(nb, threads), umbrella_steps(nb, weights, threads), n, tolerance, threads,
+    return heat_filter_on_rows(x, dims, umbrella_rows(nb, threads), umbrella_steps(nb, weights, threads), n, tolerance, false, threads,
                             frozen && !frozen->empty() ? frozen->data() : nullptr, workspace);
 }
 
@@ -689,8 +743,8 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
     bounding_box_centre(mesh.vertices, threads, workspace.centre);  // the parts move the surface by a fraction of it
     workspace.has_centre = true;
     for (int part = 0; part < report.parts; ++part) {
-        report.applications += chebyshev_filter(mesh.vertices, 3, flow_rows, flow_steps, report.iterations / report.parts, kPositionTolerance,
-                                                threads, walls ? frozen.data() : nullptr, workspace,
+        report.applications += heat_filter_on_rows(mesh.vertices, 3, flow_rows, flow_steps, report.iterations / report.parts, kPositionTolerance,
+                                                   true, threads, walls ? frozen.data() : nullptr, workspace,
                                                 settings.local_return ? before.data() : nullptr);
         apply_walls(walls, mesh);
         report.seconds_flow += seconds_since(mark);
@@ -709,7 +763,8 @@ HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, c
             report.applications += aggregate_return(offset, mesh, normals, return_rows, return_steps, aggregates, cell, local_scale, tolerance,
                                                     report.edge, threads, report, workspace);
         } else {
-            report.applications += chebyshev_filter(offset, 1, return_rows, return_steps, return_iterations, tolerance, threads, nullptr, workspace);
+            report.applications += heat_filter_on_rows(offset, 1, return_rows, return_steps, return_iterations, tolerance, true, threads, nullptr,
+                                                       workspace);
             parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
                 for (int64_t i = begin; i < end; ++i) {
                     const float back = offset[i];
