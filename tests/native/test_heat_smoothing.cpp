@@ -479,3 +479,44 @@ TEST_CASE("hfL: Taubin passes from the raw mesh's edge, heat variant, in the qua
     CHECK(s.heat_bumpiness < 0.5 * q.heat_bumpiness);
     CHECK(assess_quality(noisy, 2).hfl_passes == 0);  // no scale: not measured
 }
+
+TEST_CASE("heat filter: explicit steps, where shorter than the series, smooth as the heat kernel does", "[heat]") {
+    const double n = 3.4;  // the series needs more terms than ceil(N) = 4 steps
+    REQUIRE(heat_coefficients(n, 1e-3).size() - 1 > 4);
+    // A smooth field: z on a sphere (a low-frequency eigenfunction of the umbrella operator).
+    const TriMesh sphere = make_icosphere(4);
+    const MeshAdjacency adjacency = build_adjacency(sphere, 2);
+    const int64_t nv = static_cast<int64_t>(sphere.num_vertices());
+    std::vector<float> start(static_cast<std::size_t>(nv));
+    for (int64_t i = 0; i < nv; ++i) start[i] = sphere.vertices[3 * i + 2];
+    std::vector<float> series = start, steps = start;
+    CHECK(heat_filter(series, 1, adjacency, {}, n, 1e-3, 2) == static_cast<int>(heat_coefficients(n, 1e-3).size()) - 1);
+    CHECK(heat_filter(steps, 1, adjacency, {}, n, 1e-3, 2, nullptr, true) == 4);
+    double smoothed = 0.0, apart = 0.0;  // sums of squares: how far the series moved the field, how far apart the two end
+    for (int64_t i = 0; i < nv; ++i) {
+        smoothed += (double(series[i]) - start[i]) * (double(series[i]) - start[i]);
+        apart += (double(steps[i]) - series[i]) * (double(steps[i]) - series[i]);
+    }
+    INFO("RMS moved " << std::sqrt(smoothed / nv) << ", apart " << std::sqrt(apart / nv));
+    CHECK(std::sqrt(smoothed / nv) > 1e-3);         // the field did move
+    CHECK(std::sqrt(apart / smoothed) < 0.05);      // and both moved it alike
+    // Noise (the particles' bumps): both take most of it out.
+    const TriMesh noisy = make_noisy_sphere(4, 1.0, 0.03);
+    const MeshAdjacency noisy_adjacency = build_adjacency(noisy, 2);
+    auto roughness = [&](const std::vector<float>& x) {  // RMS of the radius about its mean
+        double sum = 0.0, sum2 = 0.0;
+        const int64_t count = static_cast<int64_t>(x.size() / 3);
+        for (int64_t i = 0; i < count; ++i) {
+            const double r = std::sqrt(double(x[3 * i]) * x[3 * i] + double(x[3 * i + 1]) * x[3 * i + 1] + double(x[3 * i + 2]) * x[3 * i + 2]);
+            sum += r, sum2 += r * r;
+        }
+        return std::sqrt(std::max(0.0, sum2 / count - (sum / count) * (sum / count)));
+    };
+    std::vector<float> series3 = noisy.vertices, steps3 = noisy.vertices;
+    heat_filter(series3, 3, noisy_adjacency, {}, n, 1e-3, 2);
+    heat_filter(steps3, 3, noisy_adjacency, {}, n, 1e-3, 2, nullptr, true);
+    const double before = roughness(noisy.vertices);
+    CHECK(roughness(series3) < 0.5 * before);
+    CHECK(roughness(steps3) < 0.5 * before);
+    CHECK(roughness(steps3) < 1.5 * roughness(series3));
+}

@@ -635,7 +635,7 @@ std::vector<double> heat_coefficients(double n, double tolerance) {
 }
 
 int heat_filter(std::vector<float>& x, int dims, const MeshAdjacency& adjacency, const std::vector<float>& weights, double n,
-                double tolerance, int threads, const std::vector<uint8_t>* frozen) {
+                double tolerance, int threads, const std::vector<uint8_t>* frozen, bool allow_explicit) {
     const CsrList& nb = adjacency.vertex_neighbours;
     const std::size_t nv = nb.rows();
     if (dims != 1 && dims != 3) throw InputError("heat_filter: 1 or 3 values per vertex");
@@ -644,8 +644,8 @@ int heat_filter(std::vector<float>& x, int dims, const MeshAdjacency& adjacency,
     if (frozen && !frozen->empty() && frozen->size() != nv) throw InputError("heat_filter: one wall mask per vertex expected");
     if (heat_coefficients(n, tolerance).size() < 2 || nv == 0) return 0;
     HeatFilterWorkspace workspace;
-    return heat_filter_on_rows(x, dims, umbrella_rows(nb, threads), umbrella_steps(nb, weights, threads), n, tolerance, false, threads,
-                            frozen && !frozen->empty() ? frozen->data() : nullptr, workspace);
+    return heat_filter_on_rows(x, dims, umbrella_rows(nb, threads), umbrella_steps(nb, weights, threads), n, tolerance, allow_explicit,
+                               threads, frozen && !frozen->empty() ? frozen->data() : nullptr, workspace);
 }
 
 HeatSmoothingReport heat_smooth(TriMesh& mesh, const MeshAdjacency& adjacency, const std::vector<float>& weights_in,

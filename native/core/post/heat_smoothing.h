@@ -87,9 +87,10 @@ std::vector<double> heat_coefficients(double n, double tolerance);
 // x <- exp(N (Y - I)) x in place, `dims` (1 or 3) floats per vertex; weights (per vertex in [0, 1]) may be empty (1
 // everywhere). frozen: optional, per vertex a bit mask of coordinates (bit k: coordinate k) the operator leaves as
 // they are (walls). Vertices of weight 0 or without neighbours keep their values bit for bit. Returns the number of
-// operator applications.
+// operator applications. allow_explicit: ceil(N) explicit steps of the same heat time instead where they are fewer
+// than the series' terms (what heat_smooth does; their response matches the heat kernel's at low frequencies).
 int heat_filter(std::vector<float>& x, int dims, const MeshAdjacency& adjacency, const std::vector<float>& weights, double n,
-                double tolerance, int threads, const std::vector<uint8_t>* frozen = nullptr);
+                double tolerance, int threads, const std::vector<uint8_t>* frozen = nullptr, bool allow_explicit = false);
 
 struct HeatSmoothingSettings {
     double reach = 0.0;             // absolute (scene units): heat time reach^2 / 4
