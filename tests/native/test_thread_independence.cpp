@@ -65,6 +65,22 @@ TEST_CASE("concurrent disjoint sets end with the smallest element as every set's
     for (int32_t v = 0; v < n; ++v) REQUIRE(sets.find(v) == v % 3);
 }
 
+TEST_CASE("items grouped by key: ascending rows, the same at every thread count", "[threads][adjacency]") {
+    // Keys of a skewed spread (many small groups, a few large ones, some empty) over several blocks.
+    const int64_t n = 50000;
+    const int32_t groups = 3001;
+    std::vector<int32_t> keys(static_cast<std::size_t>(n));
+    for (int64_t i = 0; i < n; ++i) keys[i] = static_cast<int32_t>((i * 7919 + (i % 13) * (i % 13) * 31) % (groups - 1));
+    std::vector<std::vector<int32_t>> expected(static_cast<std::size_t>(groups));
+    for (int64_t i = 0; i < n; ++i) expected[keys[i]].push_back(static_cast<int32_t>(i));
+    for (int threads : kThreadCounts) {
+        INFO(threads << " threads");
+        const CsrList list = group_by_key(keys.data(), n, groups, threads);
+        REQUIRE(list.rows() == static_cast<std::size_t>(groups));
+        for (int32_t g = 0; g < groups; ++g) REQUIRE(std::vector<int32_t>(list.row(g), list.row(g) + list.size(g)) == expected[g]);
+    }
+}
+
 TEST_CASE("vertex -> triangle lists are the serial counting sort's at every thread count", "[threads][adjacency]") {
     TriMesh mesh = droplet_mesh();
     REQUIRE(mesh.num_triangles() > 10000);

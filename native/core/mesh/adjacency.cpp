@@ -127,6 +127,43 @@ constexpr int kMostThreadsOwningVertices = 3;
 
 }  // namespace
 
+CsrList group_by_key(const int32_t* keys, int64_t n, int32_t groups, int threads) {
+    threads = resolve_threads(threads);
+    CsrList list;
+    list.offsets.resize(static_cast<std::size_t>(groups) + 1);
+    if (threads == 1) {  // visiting the items in order leaves every row sorted
+        std::fill(list.offsets.begin(), list.offsets.end(), 0);
+        for (int64_t i = 0; i < n; ++i) ++list.offsets[keys[i] + 1];
+        exclusive_scan_in_place(list.offsets, 1);
+        list.items.resize(static_cast<std::size_t>(n));
+        std::vector<int64_t> cursor(list.offsets.begin(), list.offsets.end() - 1);
+        for (int64_t i = 0; i < n; ++i) list.items[cursor[keys[i]]++] = static_cast<int32_t>(i);
+        return list;
+    }
+    std::unique_ptr<std::atomic<int64_t>[]> counts(new std::atomic<int64_t>[static_cast<std::size_t>(groups)]);
+    parallel_blocks(groups, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t g = begin; g < end; ++g) counts[g].store(0, std::memory_order_relaxed);
+    });
+    parallel_blocks(n, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i) counts[keys[i]].fetch_add(1, std::memory_order_relaxed);
+    });
+    list.offsets[0] = 0;
+    parallel_blocks(groups, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t g = begin; g < end; ++g) list.offsets[g + 1] = counts[g].exchange(0, std::memory_order_relaxed);  // now cursors
+    });
+    exclusive_scan_in_place(list.offsets, threads);
+    list.items.resize(static_cast<std::size_t>(n));
+    int32_t* items = list.items.data();
+    parallel_blocks(n, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i)
+            items[list.offsets[keys[i]] + counts[keys[i]].fetch_add(1, std::memory_order_relaxed)] = static_cast<int32_t>(i);
+    });
+    parallel_blocks(groups, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t g = begin; g < end; ++g) sort_short(items + list.offsets[g], items + list.offsets[g + 1]);
+    });
+    return list;
+}
+
 CsrList build_vertex_triangles(const TriMesh& mesh, int threads) {
     threads = resolve_threads(threads);
     if (threads == 1) return serial_vertex_triangles(mesh);

@@ -36,6 +36,10 @@ struct MeshAdjacency {
 // Throws InputError ("where: the adjacency does not belong to this mesh") unless `list` has a row per vertex.
 void require_row_per_vertex(const CsrList& list, std::size_t vertex_count, const std::string& where);
 
+// The items 0 .. n-1 grouped by keys[i] (each in [0, groups)), ascending within a group: a counting sort by key,
+// the same rows at any thread count (in parallel: atomic counters, then every row sorted).
+CsrList group_by_key(const int32_t* keys, int64_t n, int32_t groups, int threads);
+
 CsrList build_vertex_triangles(const TriMesh& mesh, int threads);
 CsrList build_vertex_neighbours(const TriMesh& mesh, const CsrList& vertex_triangles, int threads);
 MeshAdjacency build_adjacency(const TriMesh& mesh, int threads);

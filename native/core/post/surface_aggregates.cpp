@@ -84,14 +84,7 @@ SurfaceAggregates aggregate_surface(const TriMesh& mesh, const MeshAdjacency& ad
             if (root[i] != i) g.of_vertex[i] = g.of_vertex[root[i]];
     });
     root = std::vector<int32_t>();
-    g.members.offsets.assign(static_cast<std::size_t>(count) + 1, 0);
-    for (int64_t i = 0; i < nv; ++i) ++g.members.offsets[g.of_vertex[i] + 1];
-    for (int32_t a = 0; a < count; ++a) g.members.offsets[a + 1] += g.members.offsets[a];
-    g.members.items.resize(static_cast<std::size_t>(nv));
-    {
-        std::vector<int64_t> fill(g.members.offsets.begin(), g.members.offsets.end() - 1);
-        for (int64_t i = 0; i < nv; ++i) g.members.items[fill[g.of_vertex[i]]++] = static_cast<int32_t>(i);
-    }
+    g.members = group_by_key(g.of_vertex.data(), nv, count, threads);
 
     // The coarse graph, built per block of aggregates (each row from its own members only) and joined in block order.
     constexpr int64_t kRowsPerBlock = 256;
