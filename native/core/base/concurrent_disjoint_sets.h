@@ -5,6 +5,7 @@
 #pragma once
 #include <atomic>
 #include <cstdint>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -14,7 +15,8 @@ namespace meniscus {
 
 class ConcurrentDisjointSets {
 public:
-    ConcurrentDisjointSets(std::size_t n, int threads) : parent_(n) {
+    // The parents are first written by the threads (a vector of atomics would zero them all on this one first).
+    ConcurrentDisjointSets(std::size_t n, int threads) : parent_(new std::atomic<int32_t>[n]) {
         parallel_blocks(static_cast<int64_t>(n), threads, int64_t{1} << 16, [&](int64_t begin, int64_t end) {
             for (int64_t i = begin; i < end; ++i) parent_[i].store(static_cast<int32_t>(i), std::memory_order_relaxed);
         });
@@ -42,7 +44,7 @@ public:
     }
 
 private:
-    std::vector<std::atomic<int32_t>> parent_;
+    std::unique_ptr<std::atomic<int32_t>[]> parent_;
 };
 
 }  // namespace meniscus

@@ -12,6 +12,7 @@
 #include "base/errors.h"
 #include "base/parallel.h"
 #include "base/short_sort.h"
+#include "base/uninitialized_vector.h"
 
 namespace meniscus {
 
@@ -52,7 +53,7 @@ SurfaceAggregates aggregate_surface(const TriMesh& mesh, const MeshAdjacency& ad
     for (int k = 0; k < 3; ++k)
         if (!((hi[k] - lo[k]) / cell < 2097151.0)) return g;  // beyond the keys' 21 bits (or not finite)
     // Cell coordinates packed in one integer, 21 bits each.
-    std::vector<int64_t> key(static_cast<std::size_t>(nv));
+    UninitializedVector<int64_t> key(static_cast<std::size_t>(nv));  // written by the threads first
     parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t i = begin; i < end; ++i) {
             int64_t packed = 0;
@@ -73,7 +74,7 @@ SurfaceAggregates aggregate_surface(const TriMesh& mesh, const MeshAdjacency& ad
                 if (j > i && key[j] == key[i]) pieces.unite(static_cast<int32_t>(i), j);
             }
     });
-    std::vector<int32_t> root(static_cast<std::size_t>(nv));
+    UninitializedVector<int32_t> root(static_cast<std::size_t>(nv));
     parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
         for (int64_t i = begin; i < end; ++i) root[i] = pieces.find(static_cast<int32_t>(i));
     });
@@ -83,7 +84,7 @@ SurfaceAggregates aggregate_surface(const TriMesh& mesh, const MeshAdjacency& ad
         for (int64_t i = begin; i < end; ++i)
             if (root[i] != i) g.of_vertex[i] = g.of_vertex[root[i]];
     });
-    root = std::vector<int32_t>();
+    root = UninitializedVector<int32_t>();
     g.members = group_by_key(g.of_vertex.data(), nv, count, threads);
 
     // The coarse graph, built per block of aggregates (each row from its own members only) and joined in block order.

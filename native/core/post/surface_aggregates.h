@@ -12,13 +12,14 @@
 #include <cstdint>
 #include <vector>
 
+#include "base/uninitialized_vector.h"
 #include "mesh/adjacency.h"
 #include "mesh/mesh.h"
 
 namespace meniscus {
 
 struct SurfaceAggregates {
-    std::vector<int32_t> of_vertex;  // aggregate of each vertex
+    UninitializedVector<int32_t> of_vertex;  // aggregate of each vertex
     CsrList members;                 // vertices of each aggregate, ascending
     CsrList neighbours;              // aggregates sharing a mesh edge with each aggregate, ascending
     std::vector<float> coupling;     // per neighbours item: the number of mesh edges between the two
