@@ -110,7 +110,8 @@ UmbrellaRows umbrella_rows(const CsrList& nb, int threads) {
     const int64_t nv = static_cast<int64_t>(nb.rows());
     UmbrellaRows rows;
     rows.columns.resize(static_cast<std::size_t>(nv) * kRowWidth);
-    for (int64_t i = 0; i < nv; ++i)  // the rare long rows' rests, in vertex order; their other columns below
+    const bool any_long = parallel_count(nv, threads, [&](int64_t i) { return nb.size(i) > kRowWidth; }) > 0;
+    for (int64_t i = 0; any_long && i < nv; ++i)  // the rare long rows' rests, in vertex order; their other columns below
         if (nb.size(i) > kRowWidth) {
             rows.columns[kRowWidth * i + kRowWidth - 1] = ~static_cast<int32_t>(rows.overflow.size());
             rows.overflow.push_back(nb.size(i) - (kRowWidth - 1));

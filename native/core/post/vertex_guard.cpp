@@ -23,8 +23,10 @@ std::size_t keep_vertices_near_particles(TriMesh& mesh, const ParticleGrid& part
         }
         return bad;
     });
-    for (float& n : mesh.normals)
-        if (!std::isfinite(n)) n = 0.0f;
+    parallel_blocks(static_cast<int64_t>(mesh.normals.size()), threads, int64_t{1} << 16, [&](int64_t begin, int64_t end) {
+        for (int64_t k = begin; k < end; ++k)
+            if (!std::isfinite(mesh.normals[k])) mesh.normals[k] = 0.0f;
+    });
     return repaired;
 }
 

@@ -108,8 +108,9 @@ std::size_t revert_collapsed_components(TriMesh& mesh, const UnsmoothedSurface& 
     parallel_blocks(nt, threads, kVertexBlock, [&](int64_t begin, int64_t end) {
         for (int64_t t = begin; t < end; ++t) zero_area[t] = triangle_has_zero_area(mesh.vertices.data(), &mesh.triangles[3 * t]);
     });
-    for (int64_t t = 0; t < nt; ++t)
-        if (zero_area[t]) collapsed[labels[mesh.triangles[3 * t]]] = 1;
+    if (parallel_count(nt, threads, [&](int64_t t) { return zero_area[t] != 0; }) > 0)  // almost never: no serial sweep
+        for (int64_t t = 0; t < nt; ++t)
+            if (zero_area[t]) collapsed[labels[mesh.triangles[3 * t]]] = 1;
     const std::vector<double> volumes = component_volumes(mesh, labels, count, threads);
     for (int32_t c = 0; c < count; ++c)  // turned inside out
         if (unsmoothed.volumes[c] != 0.0 && volumes[c] * unsmoothed.volumes[c] <= 0.0) collapsed[c] = 1;
