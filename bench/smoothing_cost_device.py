@@ -6,7 +6,8 @@ without sharing cores; per (frame, cube size) the variants alternate on the same
   after   the build under test (build/bin/meniscus), default smoothing (the reach)
   paper   the same build with --mesh-smoothing-reach 0 (the paper's 25 iterations with volume restoration)
   before  an older build given by --before (default smoothing), if there is one
-Then the busy check: c = 1.0 against c = 0.5 of one frame, alone and with two CLI loops beside it on the same pair.
+Then the busy check: c = 1.0 against c = 0.5 of one frame, alone and with two CLI loops beside it on the same pair
+(--busy-all: of every frame, each on a worker's pair once the cost jobs are done).
 
     python3 bench/smoothing_cost_device.py --frames build/bench-device/frames --before build/bench-device/meniscus_before \
         --output $OUT/smoothing_cost_device.json
@@ -91,6 +92,7 @@ def main():
     parser.add_argument("--repetitions", type=int, default=2)
     parser.add_argument("--pairs", default="0,1;2,3;4,5;6,7;8,9;10,11", help="';'-separated core pairs, one worker each")
     parser.add_argument("--busy-cores", default="14,15")
+    parser.add_argument("--busy-all", action="store_true", help="the busy check of every frame, on the workers' pairs")
     parser.add_argument("--budget", type=float, default=300.0, help="seconds; jobs not started by then are skipped")
     parser.add_argument("--output", default="smoothing_cost_device.json")
     args = parser.parse_args()
@@ -105,6 +107,9 @@ def main():
     for cube in (float(c) for c in args.cubes.split(",") if c):
         for frame in frames:
             jobs.put((frame, cube))
+    if args.busy_all:
+        for frame in frames:
+            jobs.put((frame, "busy"))
     rows, lock = [], threading.Lock()
     output = pathlib.Path(args.output)
 
@@ -120,6 +125,13 @@ def main():
                 job = jobs.get_nowait()
             except queue.Empty:
                 return
+            if job[1] == "busy":
+                result = busy(args, args.cli, job[0], cores, deadline)
+                with lock:
+                    busy_result[job[0].name] = result
+                    write()
+                    print(json.dumps({job[0].name: result}), flush=True)
+                continue
             try:
                 row = measure(job, cores, args, variants)
             except subprocess.CalledProcessError as error:
