@@ -94,6 +94,21 @@ TEST_CASE("vertex -> triangle lists are the serial counting sort's at every thre
         CHECK(parallel.offsets == serial.offsets);
         CHECK(parallel.items == serial.items);
     }
+    // Triangles in no particular order: every block of them spans every thread's vertices, so from 3 threads on the
+    // lists come from the atomic counting instead of the owned ranges. The same lists either way.
+    TriMesh shuffled = mesh;
+    const int64_t nt = static_cast<int64_t>(shuffled.num_triangles());
+    for (int64_t t = nt - 1; t > 0; --t) {  // a fixed permutation (no random generator: the same on every platform)
+        const int64_t other = (t * 7919 + 13) % (t + 1);
+        for (int k = 0; k < 3; ++k) std::swap(shuffled.triangles[3 * t + k], shuffled.triangles[3 * other + k]);
+    }
+    const CsrList shuffled_serial = build_vertex_triangles(shuffled, 1);
+    for (int threads : kThreadCounts) {
+        INFO("shuffled, " << threads << " threads");
+        const CsrList parallel = build_vertex_triangles(shuffled, threads);
+        CHECK(parallel.offsets == shuffled_serial.offsets);
+        CHECK(parallel.items == shuffled_serial.items);
+    }
 }
 
 TEST_CASE("adjacency rows over several scan blocks hold each vertex's own triangles and neighbours", "[threads][adjacency]") {

@@ -71,10 +71,27 @@ CsrList serial_vertex_triangles(const TriMesh& mesh) {
     return list;
 }
 
-// A few threads: each owns a range of vertices and runs the counting sort above over all triangles for its own
-// vertices only. No atomics and no sort (rows fill in triangle order), but every thread reads every triangle, which
-// stops paying off beyond a few threads; on two threads the atomic version below was slower than one thread.
-CsrList owned_vertex_triangles(const TriMesh& mesh, int threads) {
+// The smallest and largest vertex each block of kSpanBlock triangles uses (empty blocks: lo > hi).
+constexpr int64_t kSpanBlock = 4096;
+struct VertexSpan {
+    int32_t lo, hi;
+};
+std::vector<VertexSpan> block_vertex_spans(const int32_t* tris, int64_t nt, int threads) {
+    std::vector<VertexSpan> spans(static_cast<std::size_t>((nt + kSpanBlock - 1) / kSpanBlock));
+    parallel_for(static_cast<int64_t>(spans.size()), threads, [&](int64_t b) {
+        VertexSpan span{INT32_MAX, INT32_MIN};
+        for (int64_t k = 3 * b * kSpanBlock, end = 3 * std::min(nt, (b + 1) * kSpanBlock); k < end; ++k)
+            span.lo = std::min(span.lo, tris[k]), span.hi = std::max(span.hi, tris[k]);
+        spans[static_cast<std::size_t>(b)] = span;
+    });
+    return spans;
+}
+
+// Each thread owns a range of vertices and runs the counting sort above for its own vertices only, over the blocks of
+// triangles that use any of them. No atomics and no sort (rows fill in triangle order). Marching cubes numbers
+// vertices and triangles brick by brick, so a block uses a narrow range of vertices: at 1 M particles a block's
+// vertices span ~5 % of all, and a block is read by 1.1 / 1.3 / 1.7 owners at 4 / 8 / 16 threads.
+CsrList owned_vertex_triangles(const TriMesh& mesh, const std::vector<VertexSpan>& spans, int threads) {
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
     const int64_t nt = static_cast<int64_t>(mesh.num_triangles());
     const int32_t* tris = mesh.triangles.data();
@@ -83,13 +100,21 @@ CsrList owned_vertex_triangles(const TriMesh& mesh, int threads) {
     list.offsets.resize(static_cast<std::size_t>(nv) + 1);
     list.offsets[0] = 0;
     int64_t* counts = list.offsets.data() + 1;
+    // Calls visit(t) for the triangles of the blocks that use a vertex of [first, first + span), in order.
+    auto for_owned_blocks = [&](int64_t first, int64_t span, auto&& visit) {
+        for (std::size_t b = 0; b < spans.size(); ++b) {
+            if (spans[b].hi < first || spans[b].lo >= first + span) continue;
+            for (int64_t t = static_cast<int64_t>(b) * kSpanBlock, end = std::min(nt, t + kSpanBlock); t < end; ++t) visit(t);
+        }
+    };
     parallel_for(threads, threads, [&](int64_t r) {
         const int64_t first = owned(r).first, span = owned(r).second - first;
         std::fill(counts + first, counts + first + span, 0);
-        for (int64_t t = 0; t < nt; ++t)
+        for_owned_blocks(first, span, [&](int64_t t) {
             for_distinct_corners(tris + 3 * t, [&](int32_t v) {
                 if (static_cast<uint64_t>(v - first) < static_cast<uint64_t>(span)) ++counts[v];
             });
+        });
     });
     exclusive_scan_in_place(list.offsets, threads);
     list.items.resize(static_cast<std::size_t>(list.offsets.back()));
@@ -97,12 +122,12 @@ CsrList owned_vertex_triangles(const TriMesh& mesh, int threads) {
     int64_t* starts = list.offsets.data();
     parallel_for(threads, threads, [&](int64_t r) {  // each row's start serves as its cursor (no copy of the starts)
         const int64_t first = owned(r).first, span = owned(r).second - first;
-        for (int64_t t = 0; t < nt; ++t) {
+        for_owned_blocks(first, span, [&](int64_t t) {
             const int32_t id = static_cast<int32_t>(t);
             for_distinct_corners(tris + 3 * t, [&](int32_t v) {
                 if (static_cast<uint64_t>(v - first) < static_cast<uint64_t>(span)) items[starts[v]++] = id;
             });
-        }
+        });
     });
     // Every row start now holds the next row's: moved back by one row, a range's first row taking the value its
     // predecessor's last row holds (row 0 starts at 0).
@@ -121,9 +146,20 @@ CsrList owned_vertex_triangles(const TriMesh& mesh, int threads) {
     return list;
 }
 
-// Up to this many threads the vertex ranges above; from here on the atomic counting below (estimated break-even at
-// about 4: the atomic version does ~2.3x the serial work, the owned ranges ~0.5x + 0.5x / threads of it each).
-constexpr int kMostThreadsOwningVertices = 3;
+// The owned ranges above while a block of triangles is read by at most this many owners on average; beyond it the
+// atomic counting below (~2.3x the serial work in all, spread over every thread). An owned range costs its thread
+// the serial work times (owners per block) / threads: 2.3 / threads against about that, so they break even near
+// 2.3 owners per block; a mesh in no particular order (every block spanning every range) stays atomic.
+constexpr double kMostOwnersPerBlock = 2.0;
+
+// The average number of owned ranges a block of triangles touches.
+double owners_per_block(const std::vector<VertexSpan>& spans, int64_t nv, int threads) {
+    if (spans.empty() || nv == 0) return 0.0;
+    int64_t touched = 0;
+    for (const VertexSpan& s : spans)
+        if (s.lo <= s.hi) touched += (int64_t{s.hi} * threads) / nv - (int64_t{s.lo} * threads) / nv + 1;
+    return static_cast<double>(touched) / static_cast<double>(spans.size());
+}
 
 }  // namespace
 
@@ -167,7 +203,9 @@ CsrList group_by_key(const int32_t* keys, int64_t n, int32_t groups, int threads
 CsrList build_vertex_triangles(const TriMesh& mesh, int threads) {
     threads = resolve_threads(threads);
     if (threads == 1) return serial_vertex_triangles(mesh);
-    if (threads <= kMostThreadsOwningVertices) return owned_vertex_triangles(mesh, threads);
+    const std::vector<VertexSpan> spans = block_vertex_spans(mesh.triangles.data(), static_cast<int64_t>(mesh.num_triangles()), threads);
+    if (owners_per_block(spans, static_cast<int64_t>(mesh.num_vertices()), threads) <= kMostOwnersPerBlock)
+        return owned_vertex_triangles(mesh, spans, threads);
     // Several threads: the same counting sort with atomic counters (slots in a row go to triangles in whatever order
     // the threads reach them), then every row sorted, so the lists equal the serial ones bit for bit. Its serial
     // sweeps over the triangles were most of decimation's time at 16 threads (~0.2 s at 1 M particles).
