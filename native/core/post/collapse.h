@@ -239,8 +239,9 @@ void drop_deleted_triangles(std::vector<int32_t>& triangles, const Uninitialized
 // Writes the working arrays back into mesh without the removed vertices. With group lists (cleanup), every
 // surviving vertex's normal and attributes become the mean over the original vertices merged into it, like its
 // position; without them (barnacles: the centre stays where it is) the survivor keeps its own values.
-// Returns the new index of every old vertex (-1: removed).
-UninitializedVector<int32_t> compact_into(TriMesh& mesh, std::vector<int32_t>& triangles, const std::vector<float>& positions,
+// Returns the new index of every old vertex (-1: removed). positions is consumed (the vertices are compacted in it
+// when few were removed).
+UninitializedVector<int32_t> compact_into(TriMesh& mesh, std::vector<int32_t>& triangles, std::vector<float>& positions,
                                           const std::vector<uint8_t>& removed, const UninitializedVector<int32_t>* group_next, int threads);
 
 }  // namespace meniscus
