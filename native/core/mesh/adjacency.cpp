@@ -51,23 +51,49 @@ inline void for_distinct_corners(const int32_t* c, F&& f) {
     if (c[2] != c[0] && c[2] != c[1]) f(c[2]);
 }
 
-// One thread: a counting sort. Visiting triangles in order leaves every row sorted without a sort.
-CsrList serial_vertex_triangles(const TriMesh& mesh) {
-    const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
-    const int64_t nt = static_cast<int64_t>(mesh.num_triangles());
-    const int32_t* tris = mesh.triangles.data();
+// Items 0 .. n-1 grouped by their keys (keys_of(i, emit) calls emit(key) once per key of item i, each in
+// [0, groups)), ascending within a group: a counting sort. One thread visits the items in order, which leaves every
+// row sorted. Several count and fill with atomic counters (slots in a row go to items in whatever order the threads
+// reach them), then sort every row, so the rows are the serial ones bit for bit.
+template <class KeysOf>
+CsrList counting_sort_by_keys(int64_t n, int64_t groups, int threads, const KeysOf& keys_of) {
     CsrList list;
-    list.offsets.assign(static_cast<std::size_t>(nv) + 1, 0);
-    int64_t* counts = list.offsets.data() + 1;
-    for (int64_t t = 0; t < nt; ++t) for_distinct_corners(tris + 3 * t, [&](int32_t v) { ++counts[v]; });
-    exclusive_scan_in_place(list.offsets, 1);
-    list.items.resize(static_cast<std::size_t>(list.offsets.back()));
-    std::vector<int64_t> cursor(list.offsets.begin(), list.offsets.end() - 1);
-    int32_t* items = list.items.data();
-    for (int64_t t = 0; t < nt; ++t) {
-        const int32_t id = static_cast<int32_t>(t);
-        for_distinct_corners(tris + 3 * t, [&](int32_t v) { items[cursor[v]++] = id; });
+    if (threads == 1) {
+        list.offsets.assign(static_cast<std::size_t>(groups) + 1, 0);
+        int64_t* counts = list.offsets.data() + 1;
+        for (int64_t i = 0; i < n; ++i) keys_of(i, [&](int32_t key) { ++counts[key]; });
+        exclusive_scan_in_place(list.offsets, 1);
+        list.items.resize(static_cast<std::size_t>(list.offsets.back()));
+        std::vector<int64_t> cursor(list.offsets.begin(), list.offsets.end() - 1);
+        int32_t* items = list.items.data();
+        for (int64_t i = 0; i < n; ++i) keys_of(i, [&](int32_t key) { items[cursor[key]++] = static_cast<int32_t>(i); });
+        return list;
     }
+    // Counters zeroed in parallel (a vector of atomics would zero them on this thread, taking all its page faults).
+    std::unique_ptr<std::atomic<int32_t>[]> counts(new std::atomic<int32_t>[static_cast<std::size_t>(groups)]);
+    parallel_blocks(groups, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t g = begin; g < end; ++g) counts[g].store(0, std::memory_order_relaxed);
+    });
+    parallel_blocks(n, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i) keys_of(i, [&](int32_t key) { counts[key].fetch_add(1, std::memory_order_relaxed); });
+    });
+    list.offsets.resize(static_cast<std::size_t>(groups) + 1);
+    list.offsets[0] = 0;
+    parallel_blocks(groups, threads, kBlock, [&](int64_t begin, int64_t end) {  // the counters become the rows' cursors
+        for (int64_t g = begin; g < end; ++g) list.offsets[g + 1] = counts[g].exchange(0, std::memory_order_relaxed);
+    });
+    exclusive_scan_in_place(list.offsets, threads);
+    list.items.resize(static_cast<std::size_t>(list.offsets.back()));
+    int32_t* items = list.items.data();
+    parallel_blocks(n, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t i = begin; i < end; ++i)
+            keys_of(i, [&](int32_t key) {
+                items[list.offsets[key] + counts[key].fetch_add(1, std::memory_order_relaxed)] = static_cast<int32_t>(i);
+            });
+    });
+    parallel_blocks(groups, threads, kBlock, [&](int64_t begin, int64_t end) {
+        for (int64_t g = begin; g < end; ++g) sort_short(items + list.offsets[g], items + list.offsets[g + 1]);
+    });
     return list;
 }
 
@@ -164,85 +190,22 @@ double owners_per_block(const std::vector<VertexSpan>& spans, int64_t nv, int th
 }  // namespace
 
 CsrList group_by_key(const int32_t* keys, int64_t n, int32_t groups, int threads) {
-    threads = resolve_threads(threads);
-    CsrList list;
-    list.offsets.resize(static_cast<std::size_t>(groups) + 1);
-    if (threads == 1) {  // visiting the items in order leaves every row sorted
-        std::fill(list.offsets.begin(), list.offsets.end(), 0);
-        for (int64_t i = 0; i < n; ++i) ++list.offsets[keys[i] + 1];
-        exclusive_scan_in_place(list.offsets, 1);
-        list.items.resize(static_cast<std::size_t>(n));
-        std::vector<int64_t> cursor(list.offsets.begin(), list.offsets.end() - 1);
-        for (int64_t i = 0; i < n; ++i) list.items[cursor[keys[i]]++] = static_cast<int32_t>(i);
-        return list;
-    }
-    std::unique_ptr<std::atomic<int64_t>[]> counts(new std::atomic<int64_t>[static_cast<std::size_t>(groups)]);
-    parallel_blocks(groups, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t g = begin; g < end; ++g) counts[g].store(0, std::memory_order_relaxed);
-    });
-    parallel_blocks(n, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t i = begin; i < end; ++i) counts[keys[i]].fetch_add(1, std::memory_order_relaxed);
-    });
-    list.offsets[0] = 0;
-    parallel_blocks(groups, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t g = begin; g < end; ++g) list.offsets[g + 1] = counts[g].exchange(0, std::memory_order_relaxed);  // now cursors
-    });
-    exclusive_scan_in_place(list.offsets, threads);
-    list.items.resize(static_cast<std::size_t>(n));
-    int32_t* items = list.items.data();
-    parallel_blocks(n, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t i = begin; i < end; ++i)
-            items[list.offsets[keys[i]] + counts[keys[i]].fetch_add(1, std::memory_order_relaxed)] = static_cast<int32_t>(i);
-    });
-    parallel_blocks(groups, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t g = begin; g < end; ++g) sort_short(items + list.offsets[g], items + list.offsets[g + 1]);
-    });
-    return list;
+    return counting_sort_by_keys(n, groups, resolve_threads(threads), [&](int64_t i, auto&& emit) { emit(keys[i]); });
 }
 
 CsrList build_vertex_triangles(const TriMesh& mesh, int threads) {
     threads = resolve_threads(threads);
-    if (threads == 1) return serial_vertex_triangles(mesh);
-    const std::vector<VertexSpan> spans = block_vertex_spans(mesh.triangles.data(), static_cast<int64_t>(mesh.num_triangles()), threads);
-    if (owners_per_block(spans, static_cast<int64_t>(mesh.num_vertices()), threads) <= kMostOwnersPerBlock)
-        return owned_vertex_triangles(mesh, spans, threads);
-    // Several threads: the same counting sort with atomic counters (slots in a row go to triangles in whatever order
-    // the threads reach them), then every row sorted, so the lists equal the serial ones bit for bit. Its serial
-    // sweeps over the triangles were most of decimation's time at 16 threads (~0.2 s at 1 M particles).
     const int64_t nv = static_cast<int64_t>(mesh.num_vertices());
     const int64_t nt = static_cast<int64_t>(mesh.num_triangles());
     const int32_t* tris = mesh.triangles.data();
-    // Counters zeroed in parallel (a vector of atomics would zero them on this thread, taking all its page faults).
-    std::unique_ptr<std::atomic<int32_t>[]> counts(new std::atomic<int32_t>[static_cast<std::size_t>(nv)]);
-    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t v = begin; v < end; ++v) counts[v].store(0, std::memory_order_relaxed);
-    });
-    parallel_blocks(nt, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t t = begin; t < end; ++t)
-            for_distinct_corners(tris + 3 * t, [&](int32_t v) { counts[v].fetch_add(1, std::memory_order_relaxed); });
-    });
-    CsrList list;
-    list.offsets.resize(static_cast<std::size_t>(nv) + 1);
-    list.offsets[0] = 0;
-    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t v = begin; v < end; ++v) list.offsets[v + 1] = counts[v].load(std::memory_order_relaxed);
-    });
-    exclusive_scan_in_place(list.offsets, threads);
-    list.items.resize(static_cast<std::size_t>(list.offsets.back()));
-    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t v = begin; v < end; ++v) counts[v].store(0, std::memory_order_relaxed);  // now the rows' cursors
-    });
-    int32_t* items = list.items.data();
-    parallel_blocks(nt, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t t = begin; t < end; ++t) {
-            const int32_t id = static_cast<int32_t>(t);
-            for_distinct_corners(tris + 3 * t, [&](int32_t v) { items[list.offsets[v] + counts[v].fetch_add(1, std::memory_order_relaxed)] = id; });
-        }
-    });
-    parallel_blocks(nv, threads, kBlock, [&](int64_t begin, int64_t end) {
-        for (int64_t v = begin; v < end; ++v) sort_short(items + list.offsets[v], items + list.offsets[v + 1]);
-    });
-    return list;
+    auto corners = [&](int64_t t, auto&& emit) { for_distinct_corners(tris + 3 * t, emit); };
+    if (threads > 1) {
+        const std::vector<VertexSpan> spans = block_vertex_spans(tris, nt, threads);
+        if (owners_per_block(spans, nv, threads) <= kMostOwnersPerBlock) return owned_vertex_triangles(mesh, spans, threads);
+    }
+    // One thread, or triangles in no particular order: the counting sort, with atomic counters on several threads.
+    // (Its serial sweeps over the triangles were most of decimation's time at 16 threads, ~0.2 s at 1 M particles.)
+    return counting_sort_by_keys(nt, nv, threads, corners);
 }
 
 int32_t collect_vertex_neighbours(const int32_t* tris, int32_t v, const int32_t* fan, int32_t fan_size, int32_t* out) {
