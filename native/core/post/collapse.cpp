@@ -12,6 +12,20 @@ constexpr int64_t kBlock = 4096;
 // Most removed vertices whose kept runs compact_into moves in place (one parallel move per run).
 constexpr int64_t kMostRunsMovedInPlace = 1024;
 
+// Drops the items listed in `gone` (ascending) from values, 3 per item, in place: the kept items between two dropped
+// ones move down by as many items as were dropped before them; the runs in ascending order, as a serial sweep moves
+// them, each run in parallel (a few items dropped of millions: the runs are long).
+template <class T>
+void drop_items_in_place(std::vector<T>& values, const std::vector<int32_t>& gone, int threads) {
+    const int64_t n = static_cast<int64_t>(values.size() / 3);
+    for (std::size_t i = 0; i < gone.size(); ++i) {
+        const int64_t first = gone[i] + 1, last = i + 1 < gone.size() ? gone[i + 1] : n;
+        const int64_t before = static_cast<int64_t>(i) + 1;
+        move_in_parallel(values.data(), 3 * first, 3 * (first - before), 3 * (last - first), threads);
+    }
+    values.resize(3 * static_cast<std::size_t>(n - static_cast<int64_t>(gone.size())));
+}
+
 }  // namespace
 
 MeshAdjacency working_adjacency(std::vector<int32_t>& triangles, std::vector<float>& positions, int threads) {
@@ -26,16 +40,7 @@ MeshAdjacency working_adjacency(std::vector<int32_t>& triangles, std::vector<flo
 
 void drop_deleted_triangles(std::vector<int32_t>& triangles, const UninitializedVector<uint8_t>& deleted, int threads) {
     const int64_t nt = static_cast<int64_t>(deleted.size());
-    const std::vector<int32_t> gone = kept_indices(nt, threads, [&](int64_t t) { return deleted[t] != 0; });
-    // The kept triangles between two deleted ones move down by as many triangles as were deleted before them; the
-    // runs in ascending order, as a serial sweep moves them, each run in parallel (a pass deletes a few triangles
-    // of millions: the runs are long).
-    for (std::size_t i = 0; i < gone.size(); ++i) {
-        const int64_t first = gone[i] + 1, last = i + 1 < gone.size() ? gone[i + 1] : nt;
-        const int64_t before = static_cast<int64_t>(i) + 1;
-        move_in_parallel(triangles.data(), 3 * first, 3 * (first - before), 3 * (last - first), threads);
-    }
-    triangles.resize(3 * static_cast<std::size_t>(nt - static_cast<int64_t>(gone.size())));
+    drop_items_in_place(triangles, kept_indices(nt, threads, [&](int64_t t) { return deleted[t] != 0; }), threads);
 }
 
 UninitializedVector<int32_t> compact_into(TriMesh& mesh, std::vector<int32_t>& triangles, std::vector<float>& positions,
@@ -49,18 +54,12 @@ UninitializedVector<int32_t> compact_into(TriMesh& mesh, std::vector<int32_t>& t
     std::vector<float> vertices;
     if (nv - ns <= kMostRunsMovedInPlace) {
         // Few removed (decimation removes a few vertices per barnacle): the kept runs between them move down in place,
-        // each in parallel, as drop_deleted_triangles does; a new array would be zero-filled on one thread (~10 ms at
-        // 1 M particles, the longest serial step left in decimation at 16 threads).
+        // as drop_deleted_triangles moves triangles; a new array would be zero-filled on one thread (~10 ms at 1 M
+        // particles, the longest serial step left in decimation at 16 threads).
         parallel_blocks(indices, threads, block, [&](int64_t begin, int64_t end) {
             for (int64_t i = begin; i < end; ++i) triangles[i] = new_index[triangles[i]];
         });
-        const std::vector<int32_t> gone = kept_indices(nv, threads, [&](int64_t v) { return removed[v] != 0; });
-        for (std::size_t i = 0; i < gone.size(); ++i) {
-            const int64_t first = gone[i] + 1, last = i + 1 < gone.size() ? gone[i + 1] : nv;
-            const int64_t before = static_cast<int64_t>(i) + 1;
-            move_in_parallel(positions.data(), 3 * first, 3 * (first - before), 3 * (last - first), threads);
-        }
-        positions.resize(3 * static_cast<std::size_t>(ns));
+        drop_items_in_place(positions, kept_indices(nv, threads, [&](int64_t v) { return removed[v] != 0; }), threads);
         vertices.swap(positions);
     } else {
         // The new vertex array (a std::vector: zero-filled on one thread) is made by one thread while the others
