@@ -22,7 +22,7 @@ constexpr int64_t kBlock = 4096;
 
 // The other aggregates the members of `a` have mesh edges to, ascending, each with the number of those edges. An
 // aggregate touches a handful of others, so a linear search of the ones found so far beats sorting one entry per
-// crossing edge (0.083 -> s at 1 M particles, 2 threads).
+// crossing edge (the coarse graph's build: 0.083 -> 0.068 s at 1 M particles, 2 threads).
 void crossing_aggregates(const SurfaceAggregates& g, const CsrList& vertex_neighbours, int64_t a, std::vector<std::pair<int32_t, float>>& out) {
     out.clear();
     for (int64_t k = g.members.begin(a); k < g.members.end(a); ++k) {
