@@ -1,15 +1,18 @@
 // Particle data as read from a file: positions plus every point attribute the file carries.
 #pragma once
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 #include "base/attributes.h"
+#include "sph/fluid_domain.h"
 
 namespace meniscus {
 
 struct ParticleData {
     std::vector<float> positions;        // 3 * count, x y z interleaved
     std::vector<Attribute> attributes;   // each with count() == size(); integer fields (ids) converted to float
+    std::optional<FluidDomain> fluid_domain;  // set by readers of grid solvers' caches (Mantaflow), else empty
 
     std::size_t size() const { return positions.size() / 3; }
 };

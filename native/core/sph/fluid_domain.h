@@ -1,0 +1,25 @@
+// What a grid-based liquid solver's cache says about its domain (Mantaflow today): where its grid lies in the world,
+// which borders are walls, which way gravity pulls and how deep its narrow band of particles reaches. Readers of such
+// caches fill what the files hold; the add-on fills the rest from the domain's settings. The narrow-band fill uses it
+// to tell the liquid's interior from the air around a shell of particles.
+#pragma once
+#include <array>
+#include <vector>
+
+namespace meniscus {
+
+struct FluidDomain {
+    // World position of grid index coordinates (i, j, k), cell corners at integers: world = origin + i*axes[0] +
+    // j*axes[1] + k*axes[2]; each axis is one cell's edge in world units (rotation and scale included).
+    std::array<double, 3> origin{0.0, 0.0, 0.0};
+    std::array<std::array<double, 3>, 3> axes{{{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}}};
+    std::array<int, 3> resolution{0, 0, 0};       // cells per axis
+    // Borders in the order -x, +x, -y, +y, -z, +z of the grid: true where the liquid cannot leave (a wall).
+    std::array<bool, 6> closed_borders{true, true, true, true, true, true};
+    std::array<double, 3> gravity{0.0, 0.0, -1.0};  // world direction (unit) in which gravity pulls
+    double band_width_cells = 0.0;  // particles are kept only this deep under the surface; 0: the whole liquid
+    // Solid obstacles as world-space triangle soups (x y z of each corner, 9 floats per triangle); may be empty.
+    std::vector<std::vector<float>> obstacles;
+};
+
+}  // namespace meniscus
