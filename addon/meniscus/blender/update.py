@@ -402,6 +402,34 @@ def _empty_for(mesh, lookup, scene_time, what):
 _suspended = 0
 
 
+class ExportRecord:
+    """What an export of a surface's frames (native_cache) met: the frames it built from particle files at the
+    render cube size, those loaded from the bake, and those that could not be built (scene frame -> (message, the
+    file held instead or None))."""
+
+    def __init__(self, obj):
+        self.pointer = obj.data.as_pointer()
+        self.built = set()
+        self.from_cache = set()
+        self.failed = {}
+
+
+_export = None
+
+
+@contextlib.contextmanager
+def exporting(obj):
+    """Inside, the surface obj is built as a final render builds it (the render cube size), and a frame that cannot
+    be built follows "If a Frame Fails" without stopping Blender: it is recorded in the ExportRecord yielded, for the
+    export to fail (Stop) or list it (Hold, Empty). Other surfaces are left as they are meanwhile (not exported)."""
+    global _export
+    record = _export = ExportRecord(obj)
+    try:
+        yield record
+    finally:
+        _export = None
+
+
 @contextlib.contextmanager
 def updates_suspended():
     """No surface is rebuilt inside: a bake steps the scene through its frames only to read the container's bounds."""
@@ -437,7 +465,10 @@ def update_surface(obj, scene, force=False, depsgraph=None):
 
     key = None
     source = None
-    for_render = render_state.is_rendering()
+    exported = _export is not None and _export.pointer == pointer
+    if _export is not None and not exported:
+        return False
+    for_render = render_state.is_rendering() or exported
     try:
         if settings.use_cache:
             key, work, source = _cache_source(obj, settings, mesh, scene_time, for_render)
@@ -458,6 +489,8 @@ def update_surface(obj, scene, force=False, depsgraph=None):
         _memory.shown[pointer] = (key, -1)
         try:
             _set_status(settings, work())
+            if exported:
+                (_export.from_cache if key[0] == "CACHE" else _export.built).add(frame)
         except _Blank as blank:
             _set_status(settings, str(blank))
         _memory.shown[pointer] = (key, len(mesh.vertices))
@@ -479,7 +512,9 @@ def update_surface(obj, scene, force=False, depsgraph=None):
                 traceback.print_exc()
         _memory.last_error[pointer] = message
         status = message if expected else f"Error: {message}"
-        if for_render:
+        if exported:
+            status = _apply_export_policy(obj, settings, mesh, scene_time, frame, message)
+        elif for_render:
             status = _apply_render_policy(obj, settings, mesh, scene_time, frame, render_policy.failure_message(
                 name, frame, source, message))
         else:
@@ -511,6 +546,21 @@ def _apply_render_policy(obj, settings, mesh, scene_time, frame, message):
         print(f"{message}\nMeniscus: rendering the frame without this surface")
     else:
         render_policy.stop_render(message, frame)
+    return message
+
+
+def _apply_export_policy(obj, settings, mesh, scene_time, frame, message):
+    """In an export, what a frame that cannot be built shows: the render policy's frame, without stopping Blender
+    (the export itself fails afterwards under Stop, naming every such frame); returns the status text."""
+    held = _hold_earlier_frame(obj, settings, mesh, scene_time) if settings.render_failure == render_policy.HOLD \
+        else None
+    if held is not None:
+        _export.failed[frame] = (message, held[0])
+        return _status_lines(f"Holding {held[0]} (this frame failed)", held[1])
+    if settings.render_failure == render_policy.HOLD:
+        message += f"; no earlier frame could be built to hold (tried {render_policy.HOLD_TRIES})"
+    _export.failed[frame] = (message, None)
+    mesh_update.clear_surface(mesh)
     return message
 
 
