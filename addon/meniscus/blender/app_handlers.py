@@ -12,6 +12,8 @@ from .surfaces import surface_objects
 @persistent
 def meniscus_frame_change_post(scene, depsgraph=None):
     try:
+        if not render_state.is_rendering():  # frames of surfaces deleted since (scripts may not update the depsgraph)
+            update.release_removed_surfaces()
         update.update_scene(scene, depsgraph=depsgraph)
         # In an animation render the next frame is built in the background while Blender renders this one.
         if render_state.is_rendering() and render_state.renders_more_frames():
@@ -28,6 +30,8 @@ def meniscus_depsgraph_update_post(scene, depsgraph=None):
     try:
         if depsgraph is None or render_state.is_rendering():
             return
+        # A surface deleted or unlinked: its kept frames go now, not when the next file loads.
+        update.release_removed_surfaces()
         updated = {update.id.original for update in depsgraph.updates if isinstance(update.id, bpy.types.Object)}
         if not updated:
             return

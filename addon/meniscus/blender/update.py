@@ -36,8 +36,9 @@ class _Memory:
         # Mesh pointer -> (rebuild key, whether a render has handled it) of a frame that could not be built: a
         # render must apply its policy even when the viewport already failed at the same key.
         self.failed = {}
-        # Reconstructed frames per mesh pointer (viewport playback; see playback), and the last scene frame each
-        # showed, which tells the direction to prefetch in.
+        # Reconstructed frames per mesh pointer (viewport playback; see playback), all within one memory budget,
+        # and the last scene frame each showed, which tells the direction to prefetch in.
+        self.budget = playback.MemoryBudget(PLAYBACK_MEMORY_BYTES)
         self.frames = {}
         self.last_frame = {}
         # Render frames found built ahead by the worker (tests and diagnostics read it).
@@ -46,8 +47,17 @@ class _Memory:
     def frame_cache(self, pointer):
         frames = self.frames.get(pointer)
         if frames is None:
-            frames = self.frames[pointer] = playback.FrameCache(PLAYBACK_MEMORY_BYTES)
+            frames = self.frames[pointer] = playback.FrameCache(PLAYBACK_MEMORY_BYTES, shared=self.budget)
         return frames
+
+    def release(self, pointer):
+        """Drops what is kept for a mesh: its frames, the work queued for it and the record of what it shows."""
+        frames = self.frames.pop(pointer, None)
+        if frames is not None:
+            _prefetcher.forget(frames)
+            frames.clear()
+        for record in (self.shown, self.last_error, self.failed, self.last_frame):
+            record.pop(pointer, None)
 
     def forget(self):
         self.sequences.clear()
@@ -61,8 +71,9 @@ class _Memory:
         self.last_frame.clear()
 
 
-# Playback: reconstructed frames kept per surface, up to this many bytes (scrubbing back is instant), and the next
-# PREFETCH_AHEAD frames in the direction of play built by one background thread (only bpy-free work runs there).
+# Playback: reconstructed frames kept per surface, up to this many bytes for all surfaces together (scrubbing back is
+# instant), and the next PREFETCH_AHEAD frames in the direction of play built by one background thread (only bpy-free
+# work runs there).
 PLAYBACK_MEMORY_BYTES = 1 << 30
 PREFETCH_AHEAD = 3
 # A frame change (viewport or render) whose frame the worker is building waits for it to finish: the build started
@@ -94,6 +105,26 @@ def forget_frames(obj):
     if frames is not None:
         _prefetcher.forget(frames)
         frames.clear()
+
+
+def release_removed_surfaces():
+    """Drops the frames kept for meshes that no surface in any scene shows any more (the surface was deleted, unlinked
+    or switched off): nothing else would free them until a file is loaded. Returns how many meshes were released."""
+    if not _memory.frames and not _memory.shown:
+        return 0
+    try:
+        shown = {obj.data.as_pointer() for scene in bpy.data.scenes for obj in surface_objects(scene)}
+    except Exception:  # data being freed (a file loading): the load handler forgets everything anyway
+        return 0
+    gone = [pointer for pointer in set(_memory.frames) | set(_memory.shown) if pointer not in shown]
+    for pointer in gone:
+        _memory.release(pointer)
+    return len(gone)
+
+
+def held_bytes():
+    """Bytes of the frames kept for playback, all surfaces together (the playback cache's own accounting)."""
+    return _memory.budget.bytes
 
 
 def stop_background_work():
