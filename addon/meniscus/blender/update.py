@@ -299,11 +299,14 @@ def _worker_job(lookup, arguments, wanted, settings):
 
 
 def _with_surface_write(result, custom_normals):
-    """The result with the numpy work of its mesh write done beforehand (mesh_update.SurfaceWrite, no bpy: the worker
-    runs this), so that Blender's thread only copies buffers when it shows the frame."""
+    """The result with its mesh in Blender's layout made beforehand (mesh_update.SurfaceWrite: corners, faces and
+    edges from the core, no bpy: the worker runs this), so that Blender's thread only copies buffers when it shows
+    the frame; the seconds it took are the hand-off's."""
+    started = time.perf_counter()
     surface = result.mesh
     result.surface_write = mesh_update.SurfaceWrite(surface.vertices, surface.triangles,
                                                     surface.normals if custom_normals else None, surface.quads)
+    result.handoff_seconds = time.perf_counter() - started
     return result
 
 
@@ -403,10 +406,14 @@ def _object_source(obj, settings, mesh, depsgraph, for_render):
 
 
 def _show_reconstruction(mesh, settings, label, result, note=""):
-    """Writes a reconstruction (from files or from an object) into the mesh; returns the status lines."""
-    blender_seconds, attribute_note = _write(mesh, settings, result.mesh, getattr(result, "surface_write", None))
+    """Writes a reconstruction (from files or from an object) into the mesh; returns the status lines, which time
+    the whole frame change: the core (reading included), the hand-off (the mesh put in Blender's layout) and Blender
+    (the buffers copied into the mesh), or only Blender's part for a frame that was ready in memory."""
+    if getattr(result, "surface_write", None) is None:
+        _with_surface_write(result, settings.use_custom_normals)
+    blender_seconds, attribute_note = _write(mesh, settings, result.mesh, result.surface_write)
     timing = f"{blender_seconds:.2f} s in Blender, {note}" if note else \
-        f"{result.seconds:.2f} s + {blender_seconds:.2f} s in Blender"
+        f"{result.seconds:.2f} s core + {result.handoff_seconds:.2f} s hand-off + {blender_seconds:.2f} s in Blender"
     return _status_lines(label, f"{result.particle_count:,} particles", _face_counts(result.mesh), timing,
                          _missing_note(result), attribute_note)
 
