@@ -1,7 +1,7 @@
 """A surface's '//' paths follow the .blend as Blender's own do: storing one prints no warning (5.2 warns about a path
 property not declared for '//'); Save As into another folder rewrites them (the surface still builds, before and
 after reopening), Save Copy gives the copy rewritten paths and leaves the open file's alone, and a .blend moved with
-its files keeps them (they resolve beside it).
+its files keeps them (they resolve beside it); the default cache folder, once baked, follows as an explicit path.
 
 Run: tests/blender/run.sh (installs the add-on from its zip first; see _support.py)
 """
@@ -102,6 +102,19 @@ def test_a_blend_moved_with_its_files_keeps_its_paths():
     check(ok, status)
     ok, status = builds(21)
     check(not ok and os.path.join(moved, "p") in status, f"frame 21 was read from the original: {status}")
+
+
+def test_the_default_cache_folder_follows_once_baked():
+    obj = bpy.data.objects[surface_name]
+    obj.meniscus.cache_pattern = ""  # the default: meniscus_cache/<object>/ beside the .blend
+    result = bpy.ops.meniscus.bake(object_name=surface_name, use_surface_range=False, frame_start=20, frame_end=20)
+    check(result == {"FINISHED"}, result)
+    other = os.path.join(ROOT, "after_bake")
+    os.makedirs(other)
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(other, "scene.blend"))
+    stored = settings().cache_pattern
+    check(stored.startswith("//../moved/meniscus_cache/"), stored)
+    check(os.path.isfile(bpy.path.abspath(stored).replace("####", "0020")), f"{stored}: the baked frame is not there")
 
 
 def _cleanup():

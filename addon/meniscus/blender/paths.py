@@ -17,6 +17,8 @@ import os
 
 import bpy
 
+from .. import cache
+
 PATH_PROPERTIES = ("file_pattern", "cache_pattern")
 FOLDER_PROPERTY = "paths_folder"
 # 4.5 and later warn when a '//' path is stored in a path property not declared to accept one.
@@ -43,6 +45,13 @@ def rebased(stored, old_folder, new_folder):
         return target
 
 
+def _baked_default(name, settings, folder):
+    """An empty Cache Files means the default folder beside the .blend; once a bake is there, the surface's frames
+    are, so it follows the .blend as an explicit path would (its '//' form; empty while nothing is baked)."""
+    default = cache.default_cache_pattern(name, settings.cache_format)
+    return default if folder and os.path.isdir(os.path.dirname(os.path.join(folder, default[2:]))) else ""
+
+
 def _surface_settings():
     for obj in bpy.data.objects:
         if obj.type == "MESH" and obj.library is None and obj.meniscus.is_surface:
@@ -58,12 +67,14 @@ def _rebase_all(old_folder, new_folder, keep_resolving=False):
         before = {FOLDER_PROPERTY: settings.get(FOLDER_PROPERTY, "")}
         for prop in PATH_PROPERTIES:
             stored = getattr(settings, prop)
+            if not stored and prop == "cache_pattern":
+                stored = _baked_default(name, settings, folder)
             new = rebased(stored, folder, new_folder)
             if new is None:
                 continue
             if keep_resolving and os.path.isdir(os.path.dirname(os.path.join(new_folder, stored[2:]))):
                 continue
-            before[prop] = stored
+            before[prop] = getattr(settings, prop)
             settings[prop] = new
         settings[FOLDER_PROPERTY] = new_folder
         changed[name] = before
