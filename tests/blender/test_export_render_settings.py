@@ -91,9 +91,8 @@ def test_unbaked_frames_are_exported_at_the_render_cube_size():
 def test_stop_fails_the_export_naming_the_frames():
     if refuses_without_alembic():
         return
-    export_with("EMPTY", 28, 29)  # an earlier good export, which a failed one must leave whole
-    earlier = os.path.getsize(ABC)
-    native_cache.remove_native_cache(surface)
+    export_with("EMPTY", 28, 29)  # an earlier good export, which a failed one must leave whole and playing
+    earlier = os.path.getsize(ABC), evaluated_counts(28)
     settings.render_failure = "STOP"
     scene.frame_start, scene.frame_end = 29, 32
     try:
@@ -104,8 +103,9 @@ def test_stop_fails_the_export_naming_the_frames():
         raise AssertionError("the export did not fail")
     check("frames 30, 31 cannot be built" in message and "Stop the Render" in message, message)
     check("double_dam_break_0030.vtk" in message and BROKEN in message, message)
-    check(not settings.use_native_cache and [m.name for m in surface.modifiers] == [], list(surface.modifiers))
-    check(os.path.getsize(ABC) == earlier, "the failed export changed the earlier file")
+    check(settings.use_native_cache and [m.name for m in surface.modifiers] == [native_cache.MODIFIER_NAME] and
+          native_cache.playing_file(surface) == ABC, list(surface.modifiers))
+    check((os.path.getsize(ABC), evaluated_counts(28)) == earlier, "the failed export changed the earlier file")
     check(sorted(os.listdir(os.path.dirname(ABC))) == [os.path.basename(ABC)], os.listdir(os.path.dirname(ABC)))
 
 

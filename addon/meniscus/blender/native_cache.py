@@ -71,7 +71,7 @@ def export_alembic(obj, scene, frame_start, frame_end, filepath=None):
     """Writes the surface's scene frames frame_start..frame_end, built at render settings, into an Alembic file and
     makes the surface play it; returns an ExportResult. Raises NativeCacheError when a frame cannot be built and the
     surface's "If a Frame Fails" is Stop (or Hold found nothing to hold), naming the frames; the file is then not
-    written (an earlier one stays)."""
+    written (an earlier one stays, and plays on where it played)."""
     if not surfaces.is_surface(obj):
         raise NativeCacheError(f"'{getattr(obj, 'name', obj)}' is not a Meniscus surface")
     if not can_export():
@@ -81,6 +81,7 @@ def export_alembic(obj, scene, frame_start, frame_end, filepath=None):
     if "//" in filepath or not os.path.isabs(filepath):
         raise NativeCacheError("Save the .blend first, or choose Cache Files: the Alembic file goes beside the cache")
     os.makedirs(os.path.dirname(filepath), exist_ok=True)
+    previous = playing_file(obj)
     remove_native_cache(obj)
     view_layer = bpy.context.view_layer
     selection = [other for other in view_layer.objects if other.select_get()]
@@ -123,6 +124,8 @@ def export_alembic(obj, scene, frame_start, frame_end, filepath=None):
     if stopped or result != {"FINISHED"} or not os.path.exists(writing):
         if os.path.exists(writing):
             os.remove(writing)
+        if previous and os.path.exists(previous):  # a failed export changes nothing: the earlier file plays on
+            _play(obj, previous)
         if stopped:
             reasons = "; ".join(f"frame {failed_frame}: {reason}" for failed_frame, reason in sorted(stopped.items()))
             raise NativeCacheError(f"Not exported: frames {_frame_list(stopped)} cannot be built ('If a Frame Fails' "
@@ -172,6 +175,13 @@ def _play(obj, filepath):
     # beside the file's, renamed 'velocity.001', and the .blend would carry a frame for nothing).
     mesh_update.clear_surface(obj.data)
     obj.meniscus.use_native_cache = True
+
+
+def playing_file(obj):
+    """The absolute path of the Alembic file the surface plays, or None."""
+    modifier = obj.modifiers.get(MODIFIER_NAME)
+    cache_file = getattr(modifier, "cache_file", None)
+    return bpy.path.abspath(cache_file.filepath, library=cache_file.library) if cache_file else None
 
 
 def remove_native_cache(obj):
