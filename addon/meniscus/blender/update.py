@@ -40,6 +40,8 @@ class _Memory:
         # and the last scene frame each showed, which tells the direction to prefetch in.
         self.budget = playback.MemoryBudget(PLAYBACK_MEMORY_BYTES)
         self.frames = {}
+        # Mesh pointer -> name of the surface object that shows it: which kept frames still have a surface.
+        self.owners = {}
         self.last_frame = {}
         # Render frames found built ahead by the worker (tests and diagnostics read it).
         self.frames_built_ahead = 0
@@ -56,7 +58,7 @@ class _Memory:
         if frames is not None:
             _prefetcher.forget(frames)
             frames.clear()
-        for record in (self.shown, self.last_error, self.failed, self.last_frame):
+        for record in (self.shown, self.last_error, self.failed, self.last_frame, self.owners):
             record.pop(pointer, None)
 
     def forget(self):
@@ -69,6 +71,7 @@ class _Memory:
             frames.clear()
         self.frames.clear()
         self.last_frame.clear()
+        self.owners.clear()
 
 
 # Playback: reconstructed frames kept per surface, up to this many bytes for all surfaces together (scrubbing back is
@@ -110,13 +113,16 @@ def forget_frames(obj):
 def release_removed_surfaces():
     """Drops the frames kept for meshes that no surface in any scene shows any more (the surface was deleted, unlinked
     or switched off): nothing else would free them until a file is loaded. Returns how many meshes were released."""
-    if not _memory.frames and not _memory.shown:
-        return 0
-    try:
-        shown = {obj.data.as_pointer() for scene in bpy.data.scenes for obj in surface_objects(scene)}
-    except Exception:  # data being freed (a file loading): the load handler forgets everything anyway
-        return 0
-    gone = [pointer for pointer in set(_memory.frames) | set(_memory.shown) if pointer not in shown]
+    gone = []
+    for pointer in set(_memory.frames) | set(_memory.shown):  # one per surface: no walk over every object
+        try:
+            obj = bpy.data.objects.get(_memory.owners.get(pointer, ""))
+            # A renamed surface is not found either: its frames are built again, which only costs time.
+            kept = is_surface(obj) and obj.data.as_pointer() == pointer and len(obj.users_scene) > 0
+        except Exception:  # data being freed (a file loading): the load handler forgets everything anyway
+            kept = False
+        if not kept:
+            gone.append(pointer)
     for pointer in gone:
         _memory.release(pointer)
     return len(gone)
@@ -495,6 +501,7 @@ def update_surface(obj, scene, force=False, depsgraph=None):
             return False
         pointer = mesh.as_pointer()
         name, frame = obj.name, scene.frame_current
+        _memory.owners[pointer] = name
         # Fractional during motion-blur shutter steps; the sequence module rounds it to the nearest file frame.
         scene_time = frame + scene.frame_subframe
         is_subframe = scene.frame_subframe != 0.0
