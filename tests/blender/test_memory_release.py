@@ -59,7 +59,7 @@ def resident_megabytes():
 def test_deleted_and_unlinked_surfaces_release_their_frames():
     for cycle, how in enumerate(("deleted", "unlinked", "deleted")):
         surface = add_surface()
-        scrub(range(20, 26))
+        scrub(range(20, 23))
         kept = held()
         check(kept > 1 << 20, f"cycle {cycle}: {kept} bytes kept after scrubbing")
         frames = update._memory.frames[surface.data.as_pointer()]
@@ -88,7 +88,7 @@ def test_the_playback_budget_holds_for_all_surfaces_together():
     saved = budget.budget_bytes
     budget.budget_bytes = int(4 * frame_bytes)  # fewer frames than the two surfaces hold
     try:
-        scrub(range(23, 30))
+        scrub(range(23, 27))
         check(held() <= budget.budget_bytes, f"{held()} bytes held over the budget of {budget.budget_bytes}")
         for obj in (first, second):
             frames = update._memory.frames[obj.data.as_pointer()]
