@@ -131,6 +131,7 @@ def measure_frame_change(bpy, scene, obj, timers, frame):
         "read": seconds["read"],
         "core": seconds["core"],
         "write": seconds["write"],
+        "handoff": seconds.get("handoff", 0.0),
         "handler": seconds["handler"],
         "glue": seconds["handler"] - seconds["read"] - seconds["core"] - seconds["write"],
         "depsgraph_and_rest": total - seconds["handler"],
@@ -144,8 +145,9 @@ def measure_frame_change(bpy, scene, obj, timers, frame):
         "load_average_1min": os.getloadavg()[0],
     }
     print(f"  frame {frame}: total {total:.3f} s = read {record['read']:.3f} + core {record['core']:.3f} + "
-          f"write {record['write']:.3f} + glue {record['glue']:.3f} + depsgraph/rest {record['depsgraph_and_rest']:.3f}"
-          f"; {record['triangles']} triangles")
+          f"write {record['write']:.3f} + glue {record['glue']:.3f} (hand-off {record['handoff']:.3f}) + depsgraph/rest "
+          f"{record['depsgraph_and_rest']:.3f}; {record['triangles']} triangles; beyond the core "
+          f"{(total - record['core'] - record['read']) / max(record['triangles'], 1) * 1e6:.3f} s per M triangles")
     sys.stdout.flush()
     return record
 
@@ -181,6 +183,11 @@ def run_blender(arguments):
     timers.wrap(api, "read_particles", "read")
     timers.wrap(api, "reconstruct", "core")
     timers.wrap(mesh_update, "write_surface", "write")
+    if hasattr(mesh_update, "_mesh_arrays"):  # the core's arrays in Blender's layout (part of glue); older add-ons
+        timers.wrap(mesh_update, "_mesh_arrays", "handoff")  # made them in numpy
+    # Frame changes that were not prefetched: nothing is built ahead, and each frame's kept result is dropped before
+    # the change (below), so every change reads, reconstructs, hands off and writes on Blender's thread.
+    update.PREFETCH_AHEAD = 0
     timers.wrap(update, "update_scene", "handler")
 
     for obj in list(bpy.data.objects):
@@ -220,6 +227,7 @@ def run_blender(arguments):
         runs = []
         for _ in range(MEASURED + 1):
             frame = frame % FRAMES + 1  # always another file: every change reconstructs
+            update.forget_frames(obj)
             runs.append(measure_frame_change(bpy, scene, obj, timers, frame))
         summary = summarize(runs)
         record["settings"]["custom_normals_on" if use_custom_normals else "custom_normals_off"] = summary

@@ -147,7 +147,7 @@ def write_before(mesh, surface, with_normals, clock, version):
 AFTER_STEPS = {  # mesh_update's step functions -> the step they stand for in the table
     "_write_vertices": "vertices",
     "_write_faces": "corners + faces (+ use_smooth on 3.4)",
-    "_compute_edges": "edges: computed (numpy)",
+    "_mesh_arrays": "corners, faces, edges: made by the core",
     "_write_edges": "edges: written",
     "_write_point_attribute": "point attributes",
     "_write_custom_normals": "custom normals",
@@ -228,8 +228,8 @@ def measure_alternatives(bpy, module, obj, surfaces, repeat, version):
     flat_vertices = np.ascontiguousarray(vertices, np.float32).reshape(-1)
     corners = np.ascontiguousarray(triangles, np.int32).reshape(-1)
     starts = np.arange(0, len(corners), 3, dtype=np.int32)
-    face_corners, following, _ = module._face_corners(np.ascontiguousarray(triangles, np.int32), np.zeros((0, 4), np.int32))
-    edges, corner_edges = module._compute_edges(face_corners, following, len(vertices))
+    no_quads = np.zeros((0, 4), np.int32)
+    edges, corner_edges = module._mesh_arrays(np.ascontiguousarray(triangles, np.int32), no_quads, len(vertices))[3]
     result = {}
 
     def add(name, function, setup=None):
@@ -263,8 +263,8 @@ def measure_alternatives(bpy, module, obj, surfaces, repeat, version):
         add("faces: remove 'sharp_face' after a use_smooth write (4.0+: all smooth)", remove_sharp_face,
             setup=lambda: mesh.polygons.foreach_set("use_smooth", np.ones(len(starts), dtype=bool)))
     add("edges: update(calc_edges=True) (Blender's hash maps)", lambda: mesh.update(calc_edges=True))
-    add("edges: computed in numpy (mesh_update._compute_edges)",
-        lambda: module._compute_edges(face_corners, following, len(vertices)))
+    add("corners, faces, edges: made by the core (mesh_update._mesh_arrays)",
+        lambda: module._mesh_arrays(np.ascontiguousarray(triangles, np.int32), no_quads, len(vertices)))
     add("edges: numpy argsort instead of the packed sort", lambda: _edges_by_argsort(triangles))
     add("edges: edges.foreach_set('vertices') int32",
         lambda: mesh.edges.foreach_set("vertices", edges.reshape(-1)))

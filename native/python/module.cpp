@@ -22,6 +22,7 @@
 #include "analysis/quality.h"
 #include "analysis/scale_metrics.h"
 #include "mesh/adjacency.h"
+#include "mesh/blender_arrays.h"
 #include "mesh/components.h"
 #include "post/heat_smoothing.h"
 #include "post/wall_constraints.h"
@@ -399,6 +400,33 @@ PYBIND11_MODULE(_core, m) {
         write_mesh(mesh, path);
     }, py::arg("path"), py::arg("vertices"), py::arg("triangles"), py::arg("normals") = py::none(), py::arg("attributes") = py::dict(),
        py::arg("quads") = py::none());
+    m.def("blender_mesh_arrays", [](const py::array& triangles, const py::object& quads, int64_t vertex_count, int threads) {
+        const auto faces = [](const py::handle& object, int columns, const char* name) {
+            const py::array a = py::reinterpret_borrow<py::array>(object);
+            if (!a.dtype().is(py::dtype::of<int32_t>()) || !(a.flags() & py::array::c_style) || a.ndim() != 2 || a.shape(1) != columns)
+                throw InputError(std::string(name) + " must be a C-contiguous int32 array of shape (N, " + std::to_string(columns) + ")");
+            return a;
+        };
+        const py::array t = faces(triangles, 3, "triangles");
+        const py::array q = quads.is_none() ? py::array(py::array_t<int32_t>(std::vector<py::ssize_t>{0, 4})) : faces(quads, 4, "quads");
+        BlenderMeshArrays arrays;
+        {
+            py::gil_scoped_release release;
+            arrays = blender_mesh_arrays(static_cast<const int32_t*>(t.data()), t.shape(0), static_cast<const int32_t*>(q.data()),
+                                         q.shape(0), vertex_count, threads);
+        }
+        py::dict out;
+        const py::ssize_t corners = static_cast<py::ssize_t>(arrays.corner_vertices.size());
+        const py::ssize_t faces_count = static_cast<py::ssize_t>(arrays.face_offsets.size());
+        const py::ssize_t edges = static_cast<py::ssize_t>(arrays.edges.size() / 2);
+        out["corner_vertices"] = to_numpy(std::move(arrays.corner_vertices), {corners});
+        out["face_offsets"] = to_numpy(std::move(arrays.face_offsets), {faces_count});
+        out["edges"] = arrays.has_edges ? py::object(to_numpy(std::move(arrays.edges), {edges, 2})) : py::object(py::none());
+        out["corner_edges"] = arrays.has_edges ? py::object(to_numpy(std::move(arrays.corner_edges), {corners})) : py::object(py::none());
+        return out;
+    }, py::arg("triangles"), py::arg("quads"), py::arg("vertex_count"), py::arg("threads") = 0,
+       "A mesh in Blender's layout: corner_vertices (C,), face_offsets (F,), edges (E, 2) and corner_edges (C,) int32 "
+       "(those two None when a face repeats a vertex); see native/core/mesh/blender_arrays.h.");
     m.def("check_mesh", [](const py::array& vertices, const py::array& triangles) {
         TriMesh mesh = mesh_from_arrays(vertices, triangles, py::none(), py::dict());
         MeshCheck check;

@@ -139,6 +139,16 @@ def read_mesh(path) -> Mesh:
     return _mesh(_core.read_mesh(str(path)))
 
 
+def blender_mesh_arrays(triangles, quads=None, vertex_count: int = 0, threads: int = 0) -> dict:
+    """The faces of a mesh in the layout Blender's Mesh stores, computed by the core (Python's lock released):
+    corner_vertices (C,) the triangles' corners then the quads', face_offsets (F,) each face's first corner, edges
+    (E, 2) as (low, high) vertex pairs in ascending order and corner_edges (C,) each corner's edge to the next corner
+    of its face (int32; edges and corner_edges None when a face repeats a vertex)."""
+    quads = None if quads is None or len(quads) == 0 else np.ascontiguousarray(quads, dtype=np.int32).reshape(-1, 4)
+    return _core.blender_mesh_arrays(np.ascontiguousarray(triangles, dtype=np.int32).reshape(-1, 3), quads,
+                                     int(vertex_count), int(threads))
+
+
 def check_mesh(mesh: Mesh) -> dict:
     """Closed, manifold (edges and vertex fans), oriented, degenerate triangles: a dict of counts and flags."""
     return _core.check_mesh(np.ascontiguousarray(mesh.vertices, dtype=np.float32), mesh.all_triangles())

@@ -2,7 +2,8 @@
 
 Two pieces, both free of bpy (a host such as the Blender add-on decides what is wanted and shows the results on its
 own thread):
-- FrameCache: results by key, the least recently used dropped once their bytes pass a budget;
+- FrameCache: results by key, the least recently used dropped once their bytes pass a budget (its own, or a
+  MemoryBudget shared with other caches: one surface's frames then make room for another's);
 - Prefetcher: one worker thread that builds wanted keys into a FrameCache. The wanted list is replaced as a whole
   on each call (work for frames no longer wanted is dropped, never started); a result built for a cache that was
   cleared meanwhile is thrown away. The core releases the GIL while it reconstructs, so the host's thread runs on.
@@ -13,7 +14,9 @@ own thread):
     result = cache.get(key) or prefetcher.wait_for(cache, key, timeout=2.0) or build_now()
 """
 import collections
+import itertools
 import threading
+import weakref
 from typing import Callable, Hashable, List, Optional, Tuple
 
 import numpy as np
@@ -43,24 +46,83 @@ def result_bytes(value) -> int:
     return total
 
 
-class FrameCache:
-    """Results by key, least recently used first out once their bytes exceed budget_bytes (the newest result is
-    always kept, even alone over the budget: the host is about to show it). Thread-safe."""
+class MemoryBudget:
+    """A byte budget shared by several FrameCaches: when their results together pass it, the least recently used
+    result of any of them is dropped first (each cache's newest result is kept). Thread-safe."""
 
     def __init__(self, budget_bytes: int):
         self.budget_bytes = int(budget_bytes)
-        self._entries = collections.OrderedDict()  # key -> (value, bytes)
+        self._caches = weakref.WeakSet()
+        self._lock = threading.Lock()
+        self._clock = itertools.count()  # use order across the caches
+
+    def tick(self) -> int:
+        return next(self._clock)
+
+    def add(self, cache: "FrameCache") -> None:
+        with self._lock:
+            self._caches.add(cache)
+
+    @property
+    def bytes(self) -> int:
+        with self._lock:
+            caches = list(self._caches)
+        return sum(cache.bytes for cache in caches)
+
+    def enforce(self) -> None:
+        """Drops the least recently used results of the caches until they fit (never a cache's newest). Takes one
+        cache's lock at a time, never while holding another's."""
+        with self._lock:
+            caches = list(self._caches)
+            total = sum(cache.bytes for cache in caches)
+            while total > self.budget_bytes:
+                candidates = [(used, cache) for cache in caches for used in [cache.oldest_use()] if used is not None]
+                if not candidates:
+                    return
+                _, oldest = min(candidates, key=lambda candidate: candidate[0])
+                total -= oldest.drop_oldest()
+
+
+class FrameCache:
+    """Results by key, least recently used first out once their bytes exceed budget_bytes, or, with shared, once the
+    results of every cache sharing that MemoryBudget exceed its budget (the newest result is always kept, even
+    alone over the budget: the host is about to show it). Thread-safe."""
+
+    def __init__(self, budget_bytes: int, shared: Optional[MemoryBudget] = None):
+        self.budget_bytes = int(budget_bytes)
+        self.shared = shared
+        self._entries = collections.OrderedDict()  # key -> (value, bytes, last use)
         self._bytes = 0
         self._lock = threading.Lock()
+        self._clock = shared.tick if shared is not None else itertools.count().__next__
         self.generation = 0  # raised by clear(): results of work started before it are not stored
+        if shared is not None:
+            shared.add(self)
 
     def get(self, key: Hashable):
         with self._lock:
             entry = self._entries.get(key)
             if entry is None:
                 return None
+            self._entries[key] = (entry[0], entry[1], self._clock())
             self._entries.move_to_end(key)
             return entry[0]
+
+    def oldest_use(self) -> Optional[int]:
+        """When the least recently used result that may be dropped was last used (None: none may)."""
+        with self._lock:
+            if len(self._entries) < 2:
+                return None
+            return next(iter(self._entries.values()))[2]
+
+    def drop_oldest(self) -> int:
+        """Drops the least recently used result unless it is the only one; returns its bytes (0 if none)."""
+        with self._lock:
+            if len(self._entries) < 2:
+                return 0
+            _, (_, dropped, _) = self._entries.popitem(last=False)
+            self._bytes -= dropped
+            return dropped
 
     def take(self, key: Hashable):
         """The result of key, removed from the cache (a render uses each frame once: it is not kept)."""
@@ -84,12 +146,14 @@ class FrameCache:
             old = self._entries.pop(key, None)
             if old is not None:
                 self._bytes -= old[1]
-            self._entries[key] = (value, size)
+            self._entries[key] = (value, size, self._clock())
             self._bytes += size
-            while self._bytes > self.budget_bytes and len(self._entries) > 1:
-                _, (_, dropped) = self._entries.popitem(last=False)
+            while self.shared is None and self._bytes > self.budget_bytes and len(self._entries) > 1:
+                _, (_, dropped, _) = self._entries.popitem(last=False)
                 self._bytes -= dropped
-            return True
+        if self.shared is not None:  # outside this cache's lock: the budget takes the caches' locks one by one
+            self.shared.enforce()
+        return True
 
     def clear(self) -> None:
         with self._lock:

@@ -84,6 +84,21 @@ def add_sample_sequence(path=None, **options):
     return added[0]
 
 
+def failing_sequence(folder):
+    """Copies sample frames 28, 29, 31 and 32 into folder/particles, 30 missing and 31 cut short in its point data
+    (as an interrupted copy leaves it); returns (that folder, the path of the broken file)."""
+    import shutil
+
+    files = os.path.join(folder, "particles")
+    os.makedirs(files)
+    for frame in (28, 29, 31, 32):
+        shutil.copy(SAMPLE_DIR / f"double_dam_break_00{frame}.vtk", files)
+    broken = os.path.join(files, "double_dam_break_0031.vtk")
+    with open(broken, "r+b") as handle:
+        handle.truncate(4000)
+    return files, broken
+
+
 def make_small_render(scene, filepath=None):
     """A camera on the sample and the cheapest Cycles render that still runs every render handler (1 sample, 32 x 18
     pixels), writing PNGs to filepath when given."""

@@ -243,18 +243,17 @@ def test_clear_and_empty_inputs():
 
 
 def _edges(triangles, vertex_count):
-    corners, following, _ = mesh_update._face_corners(triangles.astype(np.int32), np.zeros((0, 4), np.int32))
-    return mesh_update._compute_edges(corners, following, vertex_count)
+    return mesh_update._mesh_arrays(triangles.astype(np.int32), np.zeros((0, 4), np.int32), vertex_count)[3]
 
 
-def test_edge_computation_branches_agree():
+def test_edges_from_the_core_are_blenders():
     vertices, triangles, _ = FRAME_B
-    packed = _edges(triangles, len(vertices))
-    # A vertex count too large to pack the corner index next to the vertex pair takes the argsort branch.
-    sorted_ = _edges(triangles, 2 ** 31 - 1)
-    check(packed is not None and sorted_ is not None, "no edges")
-    check(np.array_equal(packed[0], sorted_[0]) and np.array_equal(packed[1], sorted_[1]), "branches differ")
-    check(bool(np.all(packed[0][:, 0] < packed[0][:, 1])), "edge vertices not ordered")
+    edges, corner_edges = _edges(triangles, len(vertices))
+    check(np.array_equal(edges, reference_edges(vertices, triangles)), "edges differ from Blender's own")
+    # Corner i's edge joins its vertex and the next corner's in the same triangle.
+    following = np.roll(triangles, -1, axis=1).reshape(-1)
+    pairs = np.sort(np.stack([triangles.reshape(-1), following], axis=1), axis=1)
+    check(np.array_equal(edges[corner_edges], pairs), "a corner's edge is not its own")
     degenerate = np.vstack([triangles, [(0, 0, 1)]]).astype(np.int32)
     check(_edges(degenerate, len(vertices)) is None, "degenerate triangle not refused")
 

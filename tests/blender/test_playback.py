@@ -30,13 +30,13 @@ settings.is_surface = True
 
 
 class _OnlyTheWorkerReconstructs:
-    """Fails the test if Blender's thread reads or reconstructs particles or computes a mesh's edges (the worker
-    thread may: it prepares the mesh write too)."""
+    """Fails the test if Blender's thread reads or reconstructs particles or puts a mesh in Blender's layout (the
+    worker thread may: it prepares the mesh write too)."""
 
     def __enter__(self):
         import threading
 
-        self.saved = api.reconstruct, api.read_particles, mesh_update._compute_edges
+        self.saved = api.reconstruct, api.read_particles, mesh_update._mesh_arrays
         main = threading.main_thread()
 
         def guarded(original):
@@ -46,11 +46,11 @@ class _OnlyTheWorkerReconstructs:
                 return original(*args, **kwargs)
             return call
 
-        api.reconstruct, api.read_particles, mesh_update._compute_edges = (guarded(function) for function in self.saved)
+        api.reconstruct, api.read_particles, mesh_update._mesh_arrays = (guarded(function) for function in self.saved)
         return self
 
     def __exit__(self, *_exc):
-        api.reconstruct, api.read_particles, mesh_update._compute_edges = self.saved
+        api.reconstruct, api.read_particles, mesh_update._mesh_arrays = self.saved
 
 
 def wait_for_the_worker(timeout=120.0):
@@ -95,6 +95,31 @@ def test_a_parameter_change_drops_the_kept_frames():
     wait_for_the_worker()
     iterations = {dict(key[4])["smoothing_iterations"] for key in kept_keys()}
     check(iterations == {3}, f"frames of the old value kept: {iterations}")
+
+
+def test_a_frame_not_built_ahead_reports_core_hand_off_and_blender():
+    """The frame change built on Blender's thread: the status times each part, and the hand-off (the mesh in
+    Blender's layout) is the core's (api.blender_mesh_arrays), not numpy's."""
+    wait_for_the_worker()
+    update.forget_frames(surface)
+    calls = []
+    original = api.blender_mesh_arrays
+
+    def counted(*args, **kwargs):
+        calls.append(len(args[0]))
+        return original(*args, **kwargs)
+
+    api.blender_mesh_arrays = counted
+    try:
+        scene.frame_set(30)
+    finally:
+        api.blender_mesh_arrays = original
+    status = settings.status
+    check(not settings.status_is_error and "ready in memory" not in status, status)
+    timing = next((line for line in status.splitlines() if "hand-off" in line), "")
+    check(timing.count(" s ") == 3 and " s core + " in timing and " s hand-off + " in timing and
+          timing.endswith(" s in Blender"), status)
+    check(calls and calls[0] == len(surface.data.polygons), f"the core made no arrays for this frame: {calls}")
 
 
 _support.run(globals(), cleanup=addon.unregister)

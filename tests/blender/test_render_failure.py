@@ -18,13 +18,7 @@ from _support import check  # noqa: E402
 
 addon = _support.enable_addon()
 _temporary = tempfile.TemporaryDirectory(prefix="meniscus_render_failure_")
-FILES = os.path.join(_temporary.name, "particles")
-os.makedirs(FILES)
-for frame in (28, 29, 31, 32):  # 30 missing
-    shutil.copy(_support.SAMPLE_DIR / f"double_dam_break_00{frame}.vtk", FILES)
-BROKEN = os.path.join(FILES, "double_dam_break_0031.vtk")
-with open(BROKEN, "r+b") as broken:  # cut short in its point data, as an interrupted copy leaves it
-    broken.truncate(4000)
+FILES, BROKEN = _support.failing_sequence(_temporary.name)  # 30 missing, 31 truncated
 
 _support.clear_scene()
 scene = bpy.context.scene

@@ -24,6 +24,23 @@ def test_cache_keeps_the_recently_used_within_its_budget():
     assert len(cache) == 1 and "huge" in cache
 
 
+def test_a_shared_budget_holds_across_caches_dropping_the_least_recently_used_of_any():
+    budget = playback.MemoryBudget(350 * 1024)
+    first, second = playback.FrameCache(1 << 30, shared=budget), playback.FrameCache(1 << 30, shared=budget)
+    first.put("a", _array(100))
+    first.put("b", _array(100))
+    second.put("x", _array(100))
+    first.get("a")  # used: "b" is now the least recently used of all
+    second.put("y", _array(100))
+    assert "b" not in first and "a" in first and "x" in second and "y" in second
+    assert budget.bytes == first.bytes + second.bytes == 300 * 1024
+    second.put("z", _array(200))  # 500 KiB: second's "x" and "y" go; first's only result is its newest, kept
+    assert "x" not in second and "y" not in second and "z" in second and "a" in first
+    assert budget.bytes == 300 * 1024
+    del second  # a cache nobody holds (its surface was deleted) stops counting
+    assert budget.bytes == first.bytes == 100 * 1024
+
+
 def test_take_returns_a_result_once_and_frees_its_bytes():
     cache = playback.FrameCache(budget_bytes=1 << 20)
     cache.put("frame 30", _array(100))

@@ -5,7 +5,7 @@ Laid out like Blender's own add-ons: properties (data, made from the parameter s
 add-on), panels (UI), app_handlers (Blender's frame-change, render, load and undo hooks), update (rebuilding a
 surface for the current frame; its frame cache and worker are meniscus.playback), arguments (the pipeline's
 arguments from the settings, messages in the panel's words), render_policy (a frame that fails in a render),
-surfaces (which objects are surfaces), render_state, sources (live objects), mesh_update (writing meshes: every
+surfaces (which objects are surfaces), paths ('//' paths through Save As and moves), render_state, sources (live objects), mesh_update (writing meshes: every
 Blender version difference) and material (the default water material). Modules import each other one way only:
 properties -> update -> arguments, never back.
 """

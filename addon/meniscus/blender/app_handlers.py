@@ -6,12 +6,14 @@ import traceback
 import bpy
 from bpy.app.handlers import persistent
 
-from . import properties, render_policy, render_state, update
+from . import paths, properties, render_policy, render_state, update
 from .surfaces import surface_objects
 
 @persistent
 def meniscus_frame_change_post(scene, depsgraph=None):
     try:
+        if not render_state.is_rendering():  # frames of surfaces deleted since (scripts may not update the depsgraph)
+            update.release_removed_surfaces()
         update.update_scene(scene, depsgraph=depsgraph)
         # In an animation render the next frame is built in the background while Blender renders this one.
         if render_state.is_rendering() and render_state.renders_more_frames():
@@ -28,6 +30,8 @@ def meniscus_depsgraph_update_post(scene, depsgraph=None):
     try:
         if depsgraph is None or render_state.is_rendering():
             return
+        # A surface deleted or unlinked: its kept frames go now, not when the next file loads.
+        update.release_removed_surfaces()
         updated = {update.id.original for update in depsgraph.updates if isinstance(update.id, bpy.types.Object)}
         if not updated:
             return
@@ -103,6 +107,7 @@ def meniscus_load_post(*_args):
     # A new file means new meshes: pointers and listings of the previous file mean nothing any more.
     update.forget_cached_state()
     _migrate_all_settings()
+    _guarded(paths.after_load)
     _append_once(bpy.app.handlers.frame_change_post, meniscus_frame_change_post)
     _evaluate_loaded_scene()
     _update_current_scene()
@@ -125,6 +130,25 @@ def meniscus_undo_redo_post(*_args):
     # usual check of file and parameters against what each mesh shows (a rebuild only on a mismatch, e.g. a mesh
     # that undo moved in memory) guards the cases where they do not.
     _update_current_scene()
+
+
+@persistent
+def meniscus_save_pre(filepath=None, *_args):
+    # Blender rewrites its own '//' paths for the folder the file goes to; the surfaces' paths follow (see paths).
+    _guarded(paths.before_save, filepath)
+
+
+@persistent
+def meniscus_save_post(filepath=None, *_args):
+    _guarded(paths.after_save, filepath)
+
+
+def _guarded(function, *arguments):
+    # Inside a save or a load: a failure is printed, never raised into Blender.
+    try:
+        function(*arguments)
+    except Exception:
+        traceback.print_exc()
 
 
 def _update_current_scene():
@@ -166,6 +190,8 @@ def _handler_slots():
             (handlers.render_complete, meniscus_render_done),
             (handlers.render_cancel, meniscus_render_done),
             (handlers.load_post, meniscus_load_post),
+            (handlers.save_pre, meniscus_save_pre),
+            (handlers.save_post, meniscus_save_post),
             (handlers.undo_post, meniscus_undo_redo_post),
             (handlers.redo_post, meniscus_undo_redo_post))
 

@@ -8,7 +8,7 @@ import numpy as np
 from bpy.props import IntProperty, StringProperty
 
 from .. import cache, farm, sequence
-from . import bake, update
+from . import bake, paths, update
 
 
 class FarmExportError(Exception):
@@ -60,7 +60,8 @@ class MENISCUS_OT_export_farm_job(bpy.types.Operator):
 
     object_name: StringProperty(name="Object", description="Surface to export (default: the active object)")
     directory: StringProperty(name="Job Folder", description="Folder the job bundle is written to",
-                              default="//meniscus_farm_job", subtype="DIR_PATH")
+                              default="//meniscus_farm_job", subtype="DIR_PATH",
+                              options=paths.BLEND_RELATIVE_OPTIONS)
     chunk_size: IntProperty(name="Frames per Task", description="Contiguous frames each farm task reconstructs",
                             default=5, min=1)
     meniscus_command: StringProperty(name="Command", default="meniscus",

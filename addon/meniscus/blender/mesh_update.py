@@ -10,8 +10,10 @@ bench/blender_mesh_write_profile.py times every step below on each Blender versi
   written from uint32 views (int32 falls back to a per-item conversion: 0.13-0.27 s for the corners alone).
 - From 4.0, positions, corner vertices, edge vertices and corner edges are generic attributes (`position`,
   `.corner_vert`, `.edge_verts`, `.corner_edge`) written directly, without the per-item MeshVertex/MeshLoop access.
-- Edges are computed here (one sort of the corners' vertex pairs in numpy, 0.06-0.2 s) and written with the
-  corners' edge indices, instead of `Mesh.update(calc_edges=True)`, Blender's hash maps (0.4-0.75 s).
+- Corners, face starts and edges come from the core (api.blender_mesh_arrays: a counting sort of the corners'
+  vertex pairs in C++, 0.03-0.07 s on the busy machine; the numpy sort it replaces took 0.06-0.2 s and its corner
+  arrays more) and are written with the corners' edge indices, instead of `Mesh.update(calc_edges=True)`,
+  Blender's hash maps (0.4-0.75 s).
 - From 4.0 faces are smooth when the `sharp_face` attribute is absent, as it is after `clear_geometry`, so
   `use_smooth` is not written (on 5.x that write alone costs 0.1-0.17 s).
 
@@ -28,6 +30,8 @@ Version differences handled here:
 """
 import bpy
 import numpy as np
+
+from .. import api
 
 BLENDER_VERSION = tuple(bpy.app.version)
 POLYGON_LOOP_TOTAL_IS_STORED = BLENDER_VERSION < (4, 0, 0)
@@ -71,8 +75,8 @@ def clear_surface(mesh):
 
 class SurfaceWrite:
     """A surface as the buffers write_surface copies into a mesh: positions, corners, face starts, edges and custom
-    normals in the types foreach_set and Blender's functions take. Pure numpy, no bpy: a background thread can build
-    it (playback's worker does), leaving Blender's thread only the copies.
+    normals in the types foreach_set and Blender's functions take. The core makes the corners, faces and edges;
+    no bpy: a background thread can build it (playback's worker does), leaving Blender's thread only the copies.
 
     vertices (V, 3), triangles (F, 3) and quads (Q, 4, optional: the core's --generate-quads) index arrays; normals
     (V, 3) unit vectors used as custom normals when given.
@@ -87,9 +91,7 @@ class SurfaceWrite:
         if self.is_empty:
             return
         self.positions = _flat(vertices, np.float32)
-        self.corners, following, self.sizes = _face_corners(triangles, quads)
-        self.face_starts, self.face_totals = _face_starts(self.sizes)
-        self.edges = _compute_edges(self.corners, following, self.vertex_count)
+        self.corners, self.face_starts, self.face_totals, self.edges = _mesh_arrays(triangles, quads, self.vertex_count)
         self.normals = None
         if normals is not None and len(normals) == self.vertex_count:
             self.normals = _normals_argument(normals)
@@ -141,30 +143,20 @@ def _write_vertices(mesh, positions):
         mesh.vertices.foreach_set("co", positions)
 
 
-def _face_corners(triangles, quads):
-    """(corner vertices, each corner's next corner's vertex within its face, face sizes) of triangles then quads."""
-    corners = np.concatenate([triangles.reshape(-1), quads.reshape(-1)]) if len(quads) else triangles.reshape(-1)
-    following = []
-    for faces in (triangles, quads):
-        if len(faces):
-            following.append(np.roll(faces, -1, axis=1).reshape(-1))
-    sizes = (len(triangles), len(quads))
-    return corners, np.concatenate(following) if len(following) > 1 else following[0], sizes
-
-
-def _face_starts(sizes):
-    """(each face's first corner, each face's corner count or None where Blender derives it) for sizes = (triangle
-    count, quad count), triangles first."""
-    triangle_count, quad_count = sizes
-    starts = np.arange(0, 3 * triangle_count, 3, dtype=np.uint32)
-    if quad_count:
-        starts = np.concatenate([starts, np.arange(3 * triangle_count, 3 * triangle_count + 4 * quad_count, 4,
-                                                   dtype=np.uint32)])
+def _mesh_arrays(triangles, quads, vertex_count):
+    """(corners, face starts as uint32, face totals or None where Blender derives them, (edges, corner edges) or None
+    when a face repeats a vertex) of triangles then quads, made by the core (api.blender_mesh_arrays: a counting sort
+    of the corners' vertex pairs, Python's lock released)."""
+    arrays = api.blender_mesh_arrays(triangles, quads, vertex_count)
+    starts = arrays["face_offsets"].view(np.uint32)
     totals = None
     if POLYGON_LOOP_TOTAL_IS_STORED:
-        totals = np.full(triangle_count + quad_count, 3, dtype=np.uint32)
-        totals[triangle_count:] = 4
-    return starts, totals
+        totals = np.full(len(starts), 3, dtype=np.uint32)
+        totals[len(triangles):] = 4
+    edges = None if arrays["edges"] is None else (arrays["edges"], arrays["corner_edges"])
+    # Without quads the corners are the triangles' indices: a view of them keeps one copy fewer in the frame cache.
+    corners = arrays["corner_vertices"] if len(quads) else triangles.reshape(-1)
+    return corners, starts, totals, edges
 
 
 def _write_faces(mesh, corners, starts, totals):
@@ -186,73 +178,6 @@ def _write_faces(mesh, corners, starts, totals):
             mesh.attributes.remove(sharp_face)
     else:
         mesh.polygons.foreach_set("use_smooth", np.ones(face_count, dtype=bool))
-
-
-def _int64_sort_kind():
-    """The faster numpy sort for _compute_edges' keys; both give the same result (the keys are all distinct).
-
-    numpy sorts int64 with SIMD (x86-simd-sort) from 1.25 on AVX-512 and from 2.0 on AVX2 too: 'quicksort' then
-    takes 0.02-0.03 s for 3 M keys. Elsewhere its quicksort is scalar (0.11-0.23 s with numpy 1.24 here) and
-    'stable' (timsort) is faster, 0.06 s, because the core's corners come partly ordered by vertex.
-    """
-    try:
-        version = tuple(int(part) for part in np.__version__.split(".")[:2])
-        core = getattr(np, "_core", None) or np.core
-        features = core._multiarray_umath.__cpu_features__
-    except (AttributeError, ValueError):
-        return "stable"
-    if (version >= (1, 25) and features.get("AVX512_SKX")) or (version >= (2, 0) and features.get("AVX2")):
-        return "quicksort"
-    return "stable"
-
-
-_SORT_KIND = _int64_sort_kind()
-
-
-def _compute_edges(corners, following, vertex_count):
-    """(edges (E, 2) int32 with v0 < v1, corner_edges (C,) int32) of the faces' corners, or None when a face repeats
-    a vertex (an edge from a vertex to itself, which Blender leaves out). following[i] is the vertex of the corner
-    after corner i in its face.
-
-    Corner i's edge joins its vertex to the next corner's vertex of the same face, as Blender defines `.corner_edge`.
-    The corners' (low, high) vertex pairs are sorted once, with the corner index packed into the low bits of the
-    same int64 key when it fits (a plain sort is 2-3x faster than an argsort), and numbered in order.
-    """
-    low = np.minimum(corners, following)
-    high = np.maximum(corners, following)
-    if np.any(low == high):
-        return None
-    count = len(corners)
-    vertex_bits = max(int(vertex_count - 1).bit_length(), 1)
-    corner_bits = max(int(count - 1).bit_length(), 1)
-    if 2 * vertex_bits + corner_bits <= 63:
-        keys = low.astype(np.int64)
-        keys <<= vertex_bits
-        keys |= high
-        keys <<= corner_bits
-        keys |= np.arange(count, dtype=np.int64)
-        keys.sort(kind=_SORT_KIND)
-        order = keys & ((1 << corner_bits) - 1)
-        keys >>= corner_bits
-    else:  # no room for the corner index (above ~1 M vertices): an argsort carries the order instead
-        vertex_bits = 32
-        keys = low.astype(np.int64)
-        keys <<= vertex_bits
-        keys |= high
-        order = np.argsort(keys, kind=_SORT_KIND)
-        keys = keys[order]
-    first = np.empty(count, dtype=bool)
-    first[0] = True
-    np.not_equal(keys[1:], keys[:-1], out=first[1:])
-    numbers = np.cumsum(first, dtype=np.int32)
-    numbers -= 1
-    corner_edges = np.empty(count, dtype=np.int32)
-    corner_edges[order] = numbers
-    unique = np.compress(first, keys)
-    edges = np.empty((len(unique), 2), dtype=np.int32)
-    np.right_shift(unique, vertex_bits, out=edges[:, 0], casting="unsafe")
-    np.bitwise_and(unique, (1 << vertex_bits) - 1, out=edges[:, 1], casting="unsafe")
-    return edges, corner_edges
 
 
 def _write_edges(mesh, edges, corner_edges):

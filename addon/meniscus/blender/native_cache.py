@@ -6,22 +6,54 @@ Alembic rather than USD: Blender 3.4, 4.x and 5.x all export and read it with ch
 exporter writes the mesh's normals (custom normals included) and its 'velocity' point attribute as the velocities
 that the modifier gives back for motion blur.
 
-The export steps the scene through the frames; at each, the frame handler builds the surface as usual (from the
-mesh cache right after a bake, so it is quick) and the exporter records it. Afterwards the surface carries the
+The export steps the scene through the frames; at each, the surface is built as a final render builds it (from the
+mesh cache right after a bake, so it is quick; else at the render cube size) and the exporter records it. A frame
+that cannot be built follows "If a Frame Fails": Stop fails the export naming every such frame (the file is not
+written), Hold and Empty export it held or empty and the operator's report lists it. Afterwards the surface carries the
 modifier and `settings.use_native_cache`: the add-on no longer rebuilds it, so what the viewport and the render show
 with and without the add-on is the same file.
 """
+import collections
 import os
 
 import bpy
 
-from . import mesh_update, surfaces, update
+from . import mesh_update, render_policy, surfaces, update
 
 MODIFIER_NAME = "Meniscus Alembic"
 
 
 class NativeCacheError(Exception):
     pass
+
+
+# path: the file written; frames: how many; cube_size: the render cube size of the frames built from particle files
+# (None when all came from the bake); from_cache: how many came from the bake; failed: scene frame -> (reason, the
+# file held instead or None) of the frames that could not be built (held or empty in the file).
+ExportResult = collections.namedtuple("ExportResult", "path frames cube_size from_cache failed")
+
+
+def _frame_list(frames):
+    return ", ".join(str(frame) for frame in sorted(frames))
+
+
+def summary(result):
+    """The operator's report: how many frames went where at which resolution, and the frames that failed."""
+    if result.cube_size is None:
+        how = "from the baked meshes"
+    else:
+        how = f"at render cube size {result.cube_size:g}"
+        if result.from_cache:
+            how = f"{how} ({result.from_cache} from the baked meshes)"
+    text = f"Wrote {result.frames} frames {how} to {result.path}"
+    held = {frame: file for frame, (_, file) in result.failed.items() if file}
+    empty = [frame for frame, (_, file) in result.failed.items() if not file]
+    if held:
+        text += "; frames that could not be built, held: " + ", ".join(
+            f"{frame} ({held[frame]})" for frame in sorted(held))
+    if empty:
+        text += f"; frames that could not be built, empty: {_frame_list(empty)}"
+    return text + "; the surface plays it now (Remove to rebuild again)"
 
 
 def can_export():
@@ -36,8 +68,10 @@ def alembic_path(obj):
 
 
 def export_alembic(obj, scene, frame_start, frame_end, filepath=None):
-    """Writes the surface's scene frames frame_start..frame_end into an Alembic file and makes the surface play it;
-    returns the file's path."""
+    """Writes the surface's scene frames frame_start..frame_end, built at render settings, into an Alembic file and
+    makes the surface play it; returns an ExportResult. Raises NativeCacheError when a frame cannot be built and the
+    surface's "If a Frame Fails" is Stop (or Hold found nothing to hold), naming the frames; the file is then not
+    written (an earlier one stays, and plays on where it played)."""
     if not surfaces.is_surface(obj):
         raise NativeCacheError(f"'{getattr(obj, 'name', obj)}' is not a Meniscus surface")
     if not can_export():
@@ -47,6 +81,7 @@ def export_alembic(obj, scene, frame_start, frame_end, filepath=None):
     if "//" in filepath or not os.path.isabs(filepath):
         raise NativeCacheError("Save the .blend first, or choose Cache Files: the Alembic file goes beside the cache")
     os.makedirs(os.path.dirname(filepath), exist_ok=True)
+    previous = playing_file(obj)
     remove_native_cache(obj)
     view_layer = bpy.context.view_layer
     selection = [other for other in view_layer.objects if other.select_get()]
@@ -58,19 +93,23 @@ def export_alembic(obj, scene, frame_start, frame_end, filepath=None):
     marker.strength = 0.0
 
     def build_before_evaluation(changed_scene, *_args):
-        # The exporter reads the scene as evaluated for each frame, before frame_change_post would rebuild.
+        # The exporter reads the scene as evaluated for each frame, before frame_change_post would rebuild. Forced:
+        # a frame shown (or failed) at the same settings before is built again, so its failure is recorded.
         if changed_scene == scene:
-            update.update_surface(obj, scene)
+            update.update_surface(obj, scene, force=True)
 
+    # Written beside the file and moved over it once complete: a failed export leaves an earlier file whole.
+    writing = os.path.splitext(filepath)[0] + ".exporting.abc"
     bpy.app.handlers.frame_change_pre.append(build_before_evaluation)
     try:
-        for other in selection:
-            other.select_set(False)
-        obj.select_set(True)
-        view_layer.objects.active = obj
-        result = bpy.ops.wm.alembic_export(filepath=filepath, start=frame_start, end=frame_end, selected=True,
-                                           uvs=False, normals=True, face_sets=False, export_hair=False,
-                                           export_particles=False, as_background_job=False)
+        with update.exporting(obj) as record:
+            for other in selection:
+                other.select_set(False)
+            obj.select_set(True)
+            view_layer.objects.active = obj
+            result = bpy.ops.wm.alembic_export(filepath=writing, start=frame_start, end=frame_end, selected=True,
+                                               uvs=False, normals=True, face_sets=False, export_hair=False,
+                                               export_particles=False, as_background_job=False)
     finally:
         bpy.app.handlers.frame_change_pre.remove(build_before_evaluation)
         obj.modifiers.remove(marker)
@@ -79,10 +118,29 @@ def export_alembic(obj, scene, frame_start, frame_end, filepath=None):
             other.select_set(True)
         view_layer.objects.active = active
         scene.frame_set(frame)
-    if result != {"FINISHED"} or not os.path.exists(filepath):
+    # Empty frames are what Empty Surface asks for; under Stop, or Hold with nothing to hold, the export fails.
+    stopped = {failed_frame: reason for failed_frame, (reason, held) in record.failed.items()
+               if held is None and obj.meniscus.render_failure != render_policy.EMPTY}
+    if stopped or result != {"FINISHED"} or not os.path.exists(writing):
+        if os.path.exists(writing):
+            os.remove(writing)
+        if previous and os.path.exists(previous):  # a failed export changes nothing: the earlier file plays on
+            _play(obj, previous)
+        if stopped:
+            reasons = "; ".join(f"frame {failed_frame}: {reason}" for failed_frame, reason in sorted(stopped.items()))
+            raise NativeCacheError(f"Not exported: frames {_frame_list(stopped)} cannot be built ('If a Frame Fails' "
+                                   f"is {_policy_label(obj)}; {reasons})")
         raise NativeCacheError(f"Blender's Alembic exporter did not write {filepath}")
+    os.replace(writing, filepath)
     _play(obj, filepath)
-    return filepath
+    from_particles = record.built | {frame for frame, (_, held) in record.failed.items() if held is None}
+    cube_size = obj.meniscus.render_cube_size if from_particles or not record.from_cache else None
+    return ExportResult(filepath, frame_end - frame_start + 1, cube_size, len(record.from_cache),
+                        dict(record.failed))
+
+
+def _policy_label(obj):
+    return next(label for identifier, label, _ in render_policy.ITEMS if identifier == obj.meniscus.render_failure)
 
 
 def _play(obj, filepath):
@@ -110,10 +168,20 @@ def _play(obj, filepath):
             bpy.data.objects.remove(other, do_unlink=True)
             if mesh is not None and mesh.users == 0:
                 bpy.data.meshes.remove(mesh)
+        # The view layer's object list is synced lazily: until then it still holds the removed objects, and a
+        # script (or the next export) that walks it reads freed memory (4.5 crashed).
+        bpy.context.view_layer.update()
     # The modifier replaces the geometry: the mesh under it is emptied (4.5 would otherwise keep its stale 'velocity'
     # beside the file's, renamed 'velocity.001', and the .blend would carry a frame for nothing).
     mesh_update.clear_surface(obj.data)
     obj.meniscus.use_native_cache = True
+
+
+def playing_file(obj):
+    """The absolute path of the Alembic file the surface plays, or None."""
+    modifier = obj.modifiers.get(MODIFIER_NAME)
+    cache_file = getattr(modifier, "cache_file", None)
+    return bpy.path.abspath(cache_file.filepath, library=cache_file.library) if cache_file else None
 
 
 def remove_native_cache(obj):
@@ -135,11 +203,11 @@ class MENISCUS_OT_export_alembic(bpy.types.Operator):
         obj = bpy.data.objects.get(self.object_name) if self.object_name else context.active_object
         scene = context.scene
         try:
-            path = export_alembic(obj, scene, scene.frame_start, scene.frame_end)
+            result = export_alembic(obj, scene, scene.frame_start, scene.frame_end)
         except NativeCacheError as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
-        self.report({"INFO"}, f"Wrote {path}; the surface plays it now (Remove to rebuild again)")
+        self.report({"WARNING"} if result.failed else {"INFO"}, summary(result))
         return {"FINISHED"}
 
 

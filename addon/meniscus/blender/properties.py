@@ -13,7 +13,7 @@ import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
 from .. import cache, parameters, sequence
-from . import render_policy, update
+from . import paths, render_policy, update
 # Re-exported: callers read the constants and these functions as properties.<name>.
 from .arguments import (DRIVEN_BY_ADDON, RENDER_CUBE_SIZE, argument_problems, in_panel_terms,  # noqa: F401
                         label_of, pipeline_arguments)
@@ -80,7 +80,7 @@ class MeniscusSurfaceSettings(bpy.types.PropertyGroup):
         description="Particle files of the sequence: a file of it (fluid_0001.vtk) or a pattern with #### (padded) or "
                     "{} (unpadded) in place of the frame number. Paths starting with // are relative to the .blend",
         subtype="FILE_PATH",
-        options=set(),
+        options=paths.BLEND_RELATIVE_OPTIONS,  # '//' paths (see paths)
         update=_rebuild_after_edit,
     )
     frame_offset: IntProperty(
@@ -158,7 +158,7 @@ class MeniscusSurfaceSettings(bpy.types.PropertyGroup):
                     "number (.npz baked here, or .ply written by the meniscus command line). Empty: a folder "
                     "'meniscus_cache' next to the .blend",
         subtype="FILE_PATH",
-        options=set(),
+        options=paths.BLEND_RELATIVE_OPTIONS,  # '//' paths (see paths)
         update=_rebuild_after_edit,
     )
     cache_format: EnumProperty(

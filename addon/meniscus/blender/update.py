@@ -36,9 +36,12 @@ class _Memory:
         # Mesh pointer -> (rebuild key, whether a render has handled it) of a frame that could not be built: a
         # render must apply its policy even when the viewport already failed at the same key.
         self.failed = {}
-        # Reconstructed frames per mesh pointer (viewport playback; see playback), and the last scene frame each
-        # showed, which tells the direction to prefetch in.
+        # Reconstructed frames per mesh pointer (viewport playback; see playback), all within one memory budget,
+        # and the last scene frame each showed, which tells the direction to prefetch in.
+        self.budget = playback.MemoryBudget(PLAYBACK_MEMORY_BYTES)
         self.frames = {}
+        # Mesh pointer -> name of the surface object that shows it: which kept frames still have a surface.
+        self.owners = {}
         self.last_frame = {}
         # Render frames found built ahead by the worker (tests and diagnostics read it).
         self.frames_built_ahead = 0
@@ -46,8 +49,17 @@ class _Memory:
     def frame_cache(self, pointer):
         frames = self.frames.get(pointer)
         if frames is None:
-            frames = self.frames[pointer] = playback.FrameCache(PLAYBACK_MEMORY_BYTES)
+            frames = self.frames[pointer] = playback.FrameCache(PLAYBACK_MEMORY_BYTES, shared=self.budget)
         return frames
+
+    def release(self, pointer):
+        """Drops what is kept for a mesh: its frames, the work queued for it and the record of what it shows."""
+        frames = self.frames.pop(pointer, None)
+        if frames is not None:
+            _prefetcher.forget(frames)
+            frames.clear()
+        for record in (self.shown, self.last_error, self.failed, self.last_frame, self.owners):
+            record.pop(pointer, None)
 
     def forget(self):
         self.sequences.clear()
@@ -59,10 +71,12 @@ class _Memory:
             frames.clear()
         self.frames.clear()
         self.last_frame.clear()
+        self.owners.clear()
 
 
-# Playback: reconstructed frames kept per surface, up to this many bytes (scrubbing back is instant), and the next
-# PREFETCH_AHEAD frames in the direction of play built by one background thread (only bpy-free work runs there).
+# Playback: reconstructed frames kept per surface, up to this many bytes for all surfaces together (scrubbing back is
+# instant), and the next PREFETCH_AHEAD frames in the direction of play built by one background thread (only bpy-free
+# work runs there).
 PLAYBACK_MEMORY_BYTES = 1 << 30
 PREFETCH_AHEAD = 3
 # A frame change (viewport or render) whose frame the worker is building waits for it to finish: the build started
@@ -94,6 +108,29 @@ def forget_frames(obj):
     if frames is not None:
         _prefetcher.forget(frames)
         frames.clear()
+
+
+def release_removed_surfaces():
+    """Drops the frames kept for meshes that no surface in any scene shows any more (the surface was deleted, unlinked
+    or switched off): nothing else would free them until a file is loaded. Returns how many meshes were released."""
+    gone = []
+    for pointer in set(_memory.frames) | set(_memory.shown):  # one per surface: no walk over every object
+        try:
+            obj = bpy.data.objects.get(_memory.owners.get(pointer, ""))
+            # A renamed surface is not found either: its frames are built again, which only costs time.
+            kept = is_surface(obj) and obj.data.as_pointer() == pointer and len(obj.users_scene) > 0
+        except Exception:  # data being freed (a file loading): the load handler forgets everything anyway
+            kept = False
+        if not kept:
+            gone.append(pointer)
+    for pointer in gone:
+        _memory.release(pointer)
+    return len(gone)
+
+
+def held_bytes():
+    """Bytes of the frames kept for playback, all surfaces together (the playback cache's own accounting)."""
+    return _memory.budget.bytes
 
 
 def stop_background_work():
@@ -268,11 +305,14 @@ def _worker_job(lookup, arguments, wanted, settings):
 
 
 def _with_surface_write(result, custom_normals):
-    """The result with the numpy work of its mesh write done beforehand (mesh_update.SurfaceWrite, no bpy: the worker
-    runs this), so that Blender's thread only copies buffers when it shows the frame."""
+    """The result with its mesh in Blender's layout made beforehand (mesh_update.SurfaceWrite: corners, faces and
+    edges from the core, no bpy: the worker runs this), so that Blender's thread only copies buffers when it shows
+    the frame; the seconds it took are the hand-off's."""
+    started = time.perf_counter()
     surface = result.mesh
     result.surface_write = mesh_update.SurfaceWrite(surface.vertices, surface.triangles,
                                                     surface.normals if custom_normals else None, surface.quads)
+    result.handoff_seconds = time.perf_counter() - started
     return result
 
 
@@ -372,10 +412,14 @@ def _object_source(obj, settings, mesh, depsgraph, for_render):
 
 
 def _show_reconstruction(mesh, settings, label, result, note=""):
-    """Writes a reconstruction (from files or from an object) into the mesh; returns the status lines."""
-    blender_seconds, attribute_note = _write(mesh, settings, result.mesh, getattr(result, "surface_write", None))
+    """Writes a reconstruction (from files or from an object) into the mesh; returns the status lines, which time
+    the whole frame change: the core (reading included), the hand-off (the mesh put in Blender's layout) and Blender
+    (the buffers copied into the mesh), or only Blender's part for a frame that was ready in memory."""
+    if getattr(result, "surface_write", None) is None:
+        _with_surface_write(result, settings.use_custom_normals)
+    blender_seconds, attribute_note = _write(mesh, settings, result.mesh, result.surface_write)
     timing = f"{blender_seconds:.2f} s in Blender, {note}" if note else \
-        f"{result.seconds:.2f} s + {blender_seconds:.2f} s in Blender"
+        f"{result.seconds:.2f} s core + {result.handoff_seconds:.2f} s hand-off + {blender_seconds:.2f} s in Blender"
     return _status_lines(label, f"{result.particle_count:,} particles", _face_counts(result.mesh), timing,
                          _missing_note(result), attribute_note)
 
@@ -400,6 +444,34 @@ def _empty_for(mesh, lookup, scene_time, what):
 
 
 _suspended = 0
+
+
+class ExportRecord:
+    """What an export of a surface's frames (native_cache) met: the frames it built from particle files at the
+    render cube size, those loaded from the bake, and those that could not be built (scene frame -> (message, the
+    file held instead or None))."""
+
+    def __init__(self, obj):
+        self.pointer = obj.data.as_pointer()
+        self.built = set()
+        self.from_cache = set()
+        self.failed = {}
+
+
+_export = None
+
+
+@contextlib.contextmanager
+def exporting(obj):
+    """Inside, the surface obj is built as a final render builds it (the render cube size), and a frame that cannot
+    be built follows "If a Frame Fails" without stopping Blender: it is recorded in the ExportRecord yielded, for the
+    export to fail (Stop) or list it (Hold, Empty). Other surfaces are left as they are meanwhile (not exported)."""
+    global _export
+    record = _export = ExportRecord(obj)
+    try:
+        yield record
+    finally:
+        _export = None
 
 
 @contextlib.contextmanager
@@ -429,6 +501,7 @@ def update_surface(obj, scene, force=False, depsgraph=None):
             return False
         pointer = mesh.as_pointer()
         name, frame = obj.name, scene.frame_current
+        _memory.owners[pointer] = name
         # Fractional during motion-blur shutter steps; the sequence module rounds it to the nearest file frame.
         scene_time = frame + scene.frame_subframe
         is_subframe = scene.frame_subframe != 0.0
@@ -437,7 +510,10 @@ def update_surface(obj, scene, force=False, depsgraph=None):
 
     key = None
     source = None
-    for_render = render_state.is_rendering()
+    exported = _export is not None and _export.pointer == pointer
+    if _export is not None and not exported:
+        return False
+    for_render = render_state.is_rendering() or exported
     try:
         if settings.use_cache:
             key, work, source = _cache_source(obj, settings, mesh, scene_time, for_render)
@@ -458,6 +534,8 @@ def update_surface(obj, scene, force=False, depsgraph=None):
         _memory.shown[pointer] = (key, -1)
         try:
             _set_status(settings, work())
+            if exported:
+                (_export.from_cache if key[0] == "CACHE" else _export.built).add(frame)
         except _Blank as blank:
             _set_status(settings, str(blank))
         _memory.shown[pointer] = (key, len(mesh.vertices))
@@ -479,7 +557,9 @@ def update_surface(obj, scene, force=False, depsgraph=None):
                 traceback.print_exc()
         _memory.last_error[pointer] = message
         status = message if expected else f"Error: {message}"
-        if for_render:
+        if exported:
+            status = _apply_export_policy(obj, settings, mesh, scene_time, frame, message)
+        elif for_render:
             status = _apply_render_policy(obj, settings, mesh, scene_time, frame, render_policy.failure_message(
                 name, frame, source, message))
         else:
@@ -511,6 +591,21 @@ def _apply_render_policy(obj, settings, mesh, scene_time, frame, message):
         print(f"{message}\nMeniscus: rendering the frame without this surface")
     else:
         render_policy.stop_render(message, frame)
+    return message
+
+
+def _apply_export_policy(obj, settings, mesh, scene_time, frame, message):
+    """In an export, what a frame that cannot be built shows: the render policy's frame, without stopping Blender
+    (the export itself fails afterwards under Stop, naming every such frame); returns the status text."""
+    held = _hold_earlier_frame(obj, settings, mesh, scene_time) if settings.render_failure == render_policy.HOLD \
+        else None
+    if held is not None:
+        _export.failed[frame] = (message, held[0])
+        return _status_lines(f"Holding {held[0]} (this frame failed)", held[1])
+    if settings.render_failure == render_policy.HOLD:
+        message += f"; no earlier frame could be built to hold (tried {render_policy.HOLD_TRIES})"
+    _export.failed[frame] = (message, None)
+    mesh_update.clear_surface(mesh)
     return message
 
 
