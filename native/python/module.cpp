@@ -52,6 +52,17 @@ void require_float_array(const py::array& a, const std::string& name, bool allow
         throw InputError(name + " must have shape (N, " + std::to_string(columns) + "), got " + py::str(py::tuple(py::cast(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim())))).cast<std::string>());
 }
 
+// Checks a face index array (a numpy array at all, then dtype, layout and shape) and names the argument.
+py::array require_index_array(const py::handle& object, const std::string& name, int columns) {
+    const std::string expected = name + " must be a C-contiguous int32 array of shape (N, " + std::to_string(columns) + ")";
+    if (!py::isinstance<py::array>(object))
+        throw InputError(expected + ", got " + py::str(py::type::of(object).attr("__name__")).cast<std::string>());
+    const py::array a = py::reinterpret_borrow<py::array>(object);
+    if (!a.dtype().is(py::dtype::of<int32_t>()) || !(a.flags() & py::array::c_style) || a.ndim() != 2 || a.shape(1) != columns)
+        throw InputError(expected);
+    return a;
+}
+
 // Attributes as numpy arrays: float32, or int32 for whole-number attributes (ids, labels), which the core carries
 // in float (exact up to 2^24).
 py::dict attributes_to_dict(std::vector<Attribute>&& attributes) {
@@ -222,17 +233,14 @@ py::dict read_particle_file(const std::string& path) {
 TriMesh mesh_from_arrays(const py::array& vertices, const py::array& triangles, const py::object& normals, const py::dict& attributes,
                          const py::object& quads = py::none()) {
     require_float_array(vertices, "vertices", false, 3);
-    if (!triangles.dtype().is(py::dtype::of<int32_t>()) || !(triangles.flags() & py::array::c_style) || triangles.ndim() != 2 || triangles.shape(1) != 3)
-        throw InputError("triangles must be a C-contiguous int32 array of shape (F, 3)");
+    require_index_array(triangles, "triangles", 3);
     TriMesh mesh;
     const float* v = static_cast<const float*>(vertices.data());
     mesh.vertices.assign(v, v + vertices.size());
     const int32_t* t = static_cast<const int32_t*>(triangles.data());
     mesh.triangles.assign(t, t + triangles.size());
     if (!quads.is_none()) {
-        const py::array q = py::reinterpret_borrow<py::array>(quads);
-        if (!q.dtype().is(py::dtype::of<int32_t>()) || !(q.flags() & py::array::c_style) || q.ndim() != 2 || q.shape(1) != 4)
-            throw InputError("quads must be a C-contiguous int32 array of shape (Q, 4)");
+        const py::array q = require_index_array(quads, "quads", 4);
         mesh.quads.assign(static_cast<const int32_t*>(q.data()), static_cast<const int32_t*>(q.data()) + q.size());
     }
     for (const std::vector<int32_t>* faces : {&mesh.triangles, &mesh.quads})
@@ -400,15 +408,9 @@ PYBIND11_MODULE(_core, m) {
         write_mesh(mesh, path);
     }, py::arg("path"), py::arg("vertices"), py::arg("triangles"), py::arg("normals") = py::none(), py::arg("attributes") = py::dict(),
        py::arg("quads") = py::none());
-    m.def("blender_mesh_arrays", [](const py::array& triangles, const py::object& quads, int64_t vertex_count, int threads) {
-        const auto faces = [](const py::handle& object, int columns, const char* name) {
-            const py::array a = py::reinterpret_borrow<py::array>(object);
-            if (!a.dtype().is(py::dtype::of<int32_t>()) || !(a.flags() & py::array::c_style) || a.ndim() != 2 || a.shape(1) != columns)
-                throw InputError(std::string(name) + " must be a C-contiguous int32 array of shape (N, " + std::to_string(columns) + ")");
-            return a;
-        };
-        const py::array t = faces(triangles, 3, "triangles");
-        const py::array q = quads.is_none() ? py::array(py::array_t<int32_t>(std::vector<py::ssize_t>{0, 4})) : faces(quads, 4, "quads");
+    m.def("blender_mesh_arrays", [](const py::object& triangles, const py::object& quads, int64_t vertex_count, int threads) {
+        py::array t = require_index_array(triangles, "triangles", 3);  // not const: a view of it may be returned
+        const py::array q = quads.is_none() ? py::array(py::array_t<int32_t>(std::vector<py::ssize_t>{0, 4})) : require_index_array(quads, "quads", 4);
         BlenderMeshArrays arrays;
         {
             py::gil_scoped_release release;
@@ -416,10 +418,12 @@ PYBIND11_MODULE(_core, m) {
                                          q.shape(0), vertex_count, threads);
         }
         py::dict out;
-        const py::ssize_t corners = static_cast<py::ssize_t>(arrays.corner_vertices.size());
+        const py::ssize_t corners = 3 * t.shape(0) + 4 * q.shape(0);
         const py::ssize_t faces_count = static_cast<py::ssize_t>(arrays.face_offsets.size());
         const py::ssize_t edges = static_cast<py::ssize_t>(arrays.edges.size() / 2);
-        out["corner_vertices"] = to_numpy(std::move(arrays.corner_vertices), {corners});
+        // Without quads the core made no copy: the corners are the triangles' own indices, a view of them.
+        out["corner_vertices"] = q.shape(0) > 0 ? py::object(to_numpy(std::move(arrays.corner_vertices), {corners}))
+                                                : py::object(t.reshape(std::vector<py::ssize_t>{t.size()}));
         out["face_offsets"] = to_numpy(std::move(arrays.face_offsets), {faces_count});
         out["edges"] = arrays.has_edges ? py::object(to_numpy(std::move(arrays.edges), {edges, 2})) : py::object(py::none());
         out["corner_edges"] = arrays.has_edges ? py::object(to_numpy(std::move(arrays.corner_edges), {corners})) : py::object(py::none());

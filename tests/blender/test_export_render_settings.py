@@ -17,7 +17,8 @@ from _support import check  # noqa: E402
 
 addon = _support.enable_addon()
 cache = addon.cache
-native_cache, update = _support.addon_modules(addon, "blender.native_cache", "blender.update")
+native_cache, update, app_handlers = _support.addon_modules(addon, "blender.native_cache", "blender.update",
+                                                           "blender.app_handlers")
 _temporary = tempfile.TemporaryDirectory(prefix="meniscus_export_render_")
 FILES, BROKEN = _support.failing_sequence(_temporary.name)  # 30 missing, 31 truncated
 
@@ -139,6 +140,78 @@ def test_empty_exports_empty_frames_and_lists_them():
     # Through the operator too: it completes (the report lists the frames as a warning).
     native_cache.remove_native_cache(surface)
     check(bpy.ops.meniscus.export_alembic(object_name=surface.name) == {"FINISHED"}, "the operator failed")
+
+
+def test_reexport_over_the_played_file():
+    """Exporting again over the file the surface plays: the cache file data-block left reading it is released first
+    (Windows cannot replace a file Blender holds open), and where the file still cannot be replaced the export fails
+    saying so, removes its partial file and plays the earlier one again."""
+    if refuses_without_alembic():
+        return
+    export_with("EMPTY", 28, 29)
+    earlier = os.path.getsize(ABC), evaluated_counts(28)
+    settings.render_failure = "EMPTY"
+    replace = native_cache.os.replace
+
+    def refused(*_args):  # what Windows says while another process holds the file open
+        raise PermissionError(13, "Permission denied")
+
+    native_cache.os.replace = refused
+    try:
+        native_cache.export_alembic(surface, scene, 28, 29, ABC)
+    except native_cache.NativeCacheError as error:
+        message = str(error)
+    else:
+        raise AssertionError("the export did not fail")
+    finally:
+        native_cache.os.replace = replace
+    check(f"{ABC} cannot be replaced (Permission denied)" in message, message)
+    check(sorted(os.listdir(os.path.dirname(ABC))) == [os.path.basename(ABC)], os.listdir(os.path.dirname(ABC)))
+    check(native_cache.playing_file(surface) == ABC and (os.path.getsize(ABC), evaluated_counts(28)) == earlier,
+          native_cache.playing_file(surface))
+    result = native_cache.export_alembic(surface, scene, 28, 29, ABC)
+    check(result.path == ABC and native_cache.playing_file(surface) == ABC, result)
+    unused = [cache_file.filepath for cache_file in bpy.data.cache_files if cache_file.users == 0]
+    check(not unused, f"cache files left reading nothing: {unused}")
+
+
+def render_still(frame):
+    """What F12 does to the surface at a frame (render_init, render_pre, the end of the render); its vertex count."""
+    scene.frame_set(frame)
+    app_handlers.meniscus_render_init(scene)
+    try:
+        app_handlers.meniscus_render_pre(scene)
+        return len(surface.data.vertices)
+    finally:
+        app_handlers.meniscus_render_done(scene)
+
+
+def test_a_render_after_a_failed_export_applies_its_own_policy():
+    """A Stop export that failed at the frame shown must not leave that frame's empty surface looking done to a
+    later render: F12 applies its own "If a Frame Fails", and so does a second F12 in a row."""
+    if refuses_without_alembic():
+        return
+    native_cache.remove_native_cache(surface)
+    viewport_cube_size = settings.cube_size
+    settings.cube_size = settings.render_cube_size  # the viewport then builds what a render builds: the same key
+    try:
+        scene.frame_set(31)
+        try:
+            export_with("STOP", 29, 31)
+        except native_cache.NativeCacheError:
+            pass
+        else:
+            raise AssertionError("the export did not fail")
+        check(scene.frame_current == 31 and len(surface.data.vertices) == 0, len(surface.data.vertices))
+        settings.render_failure = "HOLD"
+        held = built_counts(29, True)[0]
+        check(render_still(31) == held, f"{len(surface.data.vertices)} vertices, frame 29 has {held}; status "
+                                        f"{settings.status!r}")
+        # The next F12 at the same failed frame applies its own policy too, not what the previous render left.
+        settings.render_failure = "EMPTY"
+        check(render_still(31) == 0, f"{len(surface.data.vertices)} vertices; status {settings.status!r}")
+    finally:
+        settings.cube_size = viewport_cube_size
 
 
 def _cleanup():

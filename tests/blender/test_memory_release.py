@@ -80,6 +80,21 @@ def test_deleted_and_unlinked_surfaces_release_their_frames():
               f"{before:.0f} -> {resident_megabytes():.0f} MiB")
 
 
+def test_a_renamed_surface_keeps_its_frames():
+    surface = add_surface()
+    scrub(range(20, 23))
+    pointer = surface.data.as_pointer()
+    kept = update._memory.frames[pointer].bytes
+    surface.name = "renamed surface"
+    bpy.context.view_layer.update()
+    check(update.release_removed_surfaces() == 0, "the renamed surface was taken for a removed one")
+    check(pointer in update._memory.frames and update._memory.frames[pointer].bytes == kept,
+          f"{held()} bytes held, {kept} before the rename")
+    bpy.data.objects.remove(surface, do_unlink=True)  # then deleted under its new name: released as before
+    bpy.context.view_layer.update()
+    check(pointer not in update._memory.frames and held() == 0, f"{held()} bytes still held")
+
+
 def test_the_playback_budget_holds_for_all_surfaces_together():
     first, second = add_surface(), add_surface()
     scrub(range(20, 23))

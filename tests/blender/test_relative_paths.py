@@ -18,6 +18,7 @@ import _support  # noqa: E402
 from _support import check  # noqa: E402
 
 addon = _support.enable_addon()
+app_handlers, paths = _support.addon_modules(addon, "blender.app_handlers", "blender.paths")
 _temporary = tempfile.TemporaryDirectory(prefix="meniscus_relative_paths_")
 ROOT = _temporary.name
 PROJECT = os.path.join(ROOT, "project")
@@ -115,6 +116,37 @@ def test_the_default_cache_folder_follows_once_baked():
     stored = settings().cache_pattern
     check(stored.startswith("//../moved/meniscus_cache/"), stored)
     check(os.path.isfile(bpy.path.abspath(stored).replace("####", "0020")), f"{stored}: the baked frame is not there")
+
+
+def stored_paths():
+    return settings().file_pattern, settings().cache_pattern, settings().get(paths.FOLDER_PROPERTY)
+
+
+def test_a_failed_save_leaves_the_open_files_paths():
+    opened, before = bpy.data.filepath, stored_paths()
+    not_a_folder = os.path.join(ROOT, "not_a_folder")
+    open(not_a_folder, "w").close()
+    try:  # the parent is a file: Blender cannot write there, after save_pre has run
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.join(not_a_folder, "shots", "scene.blend"))
+    except RuntimeError:  # the operator's error report
+        pass
+    check(bpy.data.filepath == opened, bpy.data.filepath)
+    check(stored_paths() == before, f"after a failed save: {stored_paths()}, before it: {before}")
+
+
+def test_undo_after_save_as_rebases_the_restored_paths():
+    before = stored_paths()
+    other = os.path.join(ROOT, "undone", "shots")
+    os.makedirs(other)
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(other, "scene.blend"))
+    after = stored_paths()
+    check(after != before, after)
+    # Ctrl+Z to a step from before the Save As restores the properties it stored (background Blender has no undo
+    # stack: written here as the step holds them), and runs undo_post.
+    obj = bpy.data.objects[surface_name]
+    obj.meniscus["file_pattern"], obj.meniscus["cache_pattern"], obj.meniscus[paths.FOLDER_PROPERTY] = before
+    app_handlers.meniscus_undo_redo_post()
+    check(stored_paths() == after, f"after undo: {stored_paths()}, the file's folder needs {after}")
 
 
 def _cleanup():

@@ -58,3 +58,28 @@ def test_a_face_repeating_a_vertex_leaves_the_edges_to_blender():
 def test_an_index_outside_the_vertices_is_refused():
     with pytest.raises(ValueError, match="refer to no vertex"):
         api.blender_mesh_arrays(np.array([(0, 1, 5)], np.int32), None, 3)
+
+
+def test_without_quads_the_corners_are_a_view_of_the_triangles():
+    triangles = np.array([(0, 1, 2), (2, 1, 3)], np.int32)
+    arrays = api.blender_mesh_arrays(triangles, None, 4)
+    assert np.shares_memory(arrays["corner_vertices"], triangles)
+    check_equal(arrays, triangles, np.zeros((0, 4), np.int32), 4)
+    # Vertices no corner uses leave empty groups in the edge sort (the last one past the end of its keys).
+    check_equal(api.blender_mesh_arrays(triangles, None, 9), triangles, np.zeros((0, 4), np.int32), 9)
+    empty = api.blender_mesh_arrays(np.zeros((0, 3), np.int32), None, 5)
+    assert len(empty["corner_vertices"]) == 0 and len(empty["edges"]) == 0 and len(empty["face_offsets"]) == 0
+
+
+@pytest.mark.parametrize("argument", ["triangles", "quads"])
+def test_index_arrays_that_are_not_numpy_arrays_are_refused_by_name(argument):
+    """The core's own function (api converts lists first): a list is refused with a message, not read as an array."""
+    faces = {"triangles": np.array([(0, 1, 2)], np.int32), "quads": np.array([(0, 1, 2, 3)], np.int32)}
+    faces[argument] = faces[argument].tolist()
+    with pytest.raises(ValueError, match=f"{argument} must be a C-contiguous int32 array of shape .*got list"):
+        meniscus._core.blender_mesh_arrays(faces["triangles"], faces["quads"], 4, 1)
+    if argument == "triangles":  # write_mesh's triangles are typed as an array: pybind11 refuses a list itself
+        return
+    with pytest.raises(ValueError, match="quads must be a C-contiguous int32 array"):
+        meniscus._core.write_mesh("unused.ply", np.zeros((4, 3), np.float32), faces["triangles"], None, {},
+                                  faces["quads"])

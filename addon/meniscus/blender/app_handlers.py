@@ -48,6 +48,7 @@ def meniscus_depsgraph_update_post(scene, depsgraph=None):
 def meniscus_render_init(scene, *_args):
     render_state.set_rendering(True)
     render_policy.forget_failed_frames()
+    update.forget_handled_failures()
 
 
 @persistent
@@ -128,7 +129,9 @@ def _evaluate_loaded_scene():
 def meniscus_undo_redo_post(*_args):
     # Undo restores parameters, the frame and the meshes as the undo step saved them, which normally agree; the
     # usual check of file and parameters against what each mesh shows (a rebuild only on a mismatch, e.g. a mesh
-    # that undo moved in memory) guards the cases where they do not.
+    # that undo moved in memory) guards the cases where they do not. Paths first: a step from before a Save As holds
+    # '//' paths written for the folder the file was in then.
+    _guarded(paths.after_undo)
     _update_current_scene()
 
 
@@ -141,6 +144,11 @@ def meniscus_save_pre(filepath=None, *_args):
 @persistent
 def meniscus_save_post(filepath=None, *_args):
     _guarded(paths.after_save, filepath)
+
+
+@persistent
+def meniscus_save_post_fail(filepath=None, *_args):
+    _guarded(paths.after_failed_save, filepath)
 
 
 def _guarded(function, *arguments):
@@ -182,7 +190,9 @@ def ensure_registered():
 
 def _handler_slots():
     handlers = bpy.app.handlers
-    return ((handlers.frame_change_post, meniscus_frame_change_post),
+    # A failed save runs no save_post: 4.2+ tell it apart (3.4 rewrites no path before it writes, see paths).
+    save_failed = ((handlers.save_post_fail, meniscus_save_post_fail),) if hasattr(handlers, "save_post_fail") else ()
+    return save_failed + ((handlers.frame_change_post, meniscus_frame_change_post),
             (handlers.depsgraph_update_post, meniscus_depsgraph_update_post),
             (handlers.render_init, meniscus_render_init),
             (handlers.render_pre, meniscus_render_pre),

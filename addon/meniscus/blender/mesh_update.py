@@ -154,8 +154,8 @@ def _mesh_arrays(triangles, quads, vertex_count):
         totals = np.full(len(starts), 3, dtype=np.uint32)
         totals[len(triangles):] = 4
     edges = None if arrays["edges"] is None else (arrays["edges"], arrays["corner_edges"])
-    # Without quads the corners are the triangles' indices: a view of them keeps one copy fewer in the frame cache.
-    corners = arrays["corner_vertices"] if len(quads) else triangles.reshape(-1)
+    # Without quads the corners are a view of the triangles' indices (no copy made, none kept in the frame cache).
+    corners = arrays["corner_vertices"]
     return corners, starts, totals, edges
 
 

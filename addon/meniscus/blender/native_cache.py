@@ -107,9 +107,15 @@ def export_alembic(obj, scene, frame_start, frame_end, filepath=None):
                 other.select_set(False)
             obj.select_set(True)
             view_layer.objects.active = obj
-            result = bpy.ops.wm.alembic_export(filepath=writing, start=frame_start, end=frame_end, selected=True,
-                                               uvs=False, normals=True, face_sets=False, export_hair=False,
-                                               export_particles=False, as_background_job=False)
+            try:
+                result = bpy.ops.wm.alembic_export(filepath=writing, start=frame_start, end=frame_end,
+                                                   selected=True, uvs=False, normals=True, face_sets=False,
+                                                   export_hair=False, export_particles=False,
+                                                   as_background_job=False)
+            except RuntimeError as error:  # the exporter's error report (a folder it cannot write, ...)
+                result, export_error = {"CANCELLED"}, error
+            else:
+                export_error = None
     finally:
         bpy.app.handlers.frame_change_pre.remove(build_before_evaluation)
         obj.modifiers.remove(marker)
@@ -122,21 +128,46 @@ def export_alembic(obj, scene, frame_start, frame_end, filepath=None):
     stopped = {failed_frame: reason for failed_frame, (reason, held) in record.failed.items()
                if held is None and obj.meniscus.render_failure != render_policy.EMPTY}
     if stopped or result != {"FINISHED"} or not os.path.exists(writing):
-        if os.path.exists(writing):
-            os.remove(writing)
-        if previous and os.path.exists(previous):  # a failed export changes nothing: the earlier file plays on
-            _play(obj, previous)
+        _abandon(obj, writing, previous)
         if stopped:
             reasons = "; ".join(f"frame {failed_frame}: {reason}" for failed_frame, reason in sorted(stopped.items()))
             raise NativeCacheError(f"Not exported: frames {_frame_list(stopped)} cannot be built ('If a Frame Fails' "
                                    f"is {_policy_label(obj)}; {reasons})")
-        raise NativeCacheError(f"Blender's Alembic exporter did not write {filepath}")
-    os.replace(writing, filepath)
+        raise NativeCacheError(f"Blender's Alembic exporter did not write {filepath}" +
+                               (f": {export_error}" if export_error else ""))
+    try:
+        # Blender keeps an archive open while a cache file data-block reads it (the modifier removed above left
+        # one): on Windows the file could not be replaced.
+        _release_cache_files(filepath)
+        os.replace(writing, filepath)
+    except OSError as error:
+        _abandon(obj, writing, previous)
+        raise NativeCacheError(f"Not exported: {filepath} cannot be replaced ({error.strerror or error}); close "
+                               "what holds it open (another Blender playing it) and export again") from error
     _play(obj, filepath)
     from_particles = record.built | {frame for frame, (_, held) in record.failed.items() if held is None}
     cube_size = obj.meniscus.render_cube_size if from_particles or not record.from_cache else None
     return ExportResult(filepath, frame_end - frame_start + 1, cube_size, len(record.from_cache),
                         dict(record.failed))
+
+
+def _abandon(obj, writing, previous):
+    """A failed export changes nothing: the partial file goes and the earlier file plays on."""
+    if os.path.exists(writing):
+        os.remove(writing)
+    if previous and os.path.exists(previous):
+        _play(obj, previous)
+
+
+def _release_cache_files(filepath):
+    """Removes the cache file data-blocks that read filepath and nothing uses any more (Blender then closes it)."""
+    def reads(cache_file):
+        path = os.path.abspath(bpy.path.abspath(cache_file.filepath, library=cache_file.library))
+        return os.path.normcase(path) == os.path.normcase(filepath)
+
+    unused = [cache_file for cache_file in bpy.data.cache_files if cache_file.users == 0 and reads(cache_file)]
+    if unused:  # bpy.data.cache_files has no remove()
+        bpy.data.batch_remove(unused)
 
 
 def _policy_label(obj):

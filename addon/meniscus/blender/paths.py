@@ -4,12 +4,13 @@ Blender rewrites its own '//' paths when Save As puts the .blend in another fold
 among them. So each surface records the folder its '//' paths are relative to (`paths_folder`, written at every
 save), and they are rewritten here:
 - Save As / Save Copy: where Blender says where the file goes (4.x and 5.x: save_pre's argument), before it is
-  written (a copy gets the rewritten paths, the open file keeps its own);
+  written (a copy gets the rewritten paths, the open file keeps its own, and so does a save that fails);
 - Save As where it does not (3.4): in memory right after the save; the file written keeps the old folder, which
   the next load sees;
 - opening a .blend from another folder than its paths were written for: each '//' path that does not resolve
   beside the .blend (it was moved without its files, or saved elsewhere by 3.4) is rewritten to point where it
-  pointed from the recorded folder; one that resolves (moved with its files) is kept.
+  pointed from the recorded folder; one that resolves (moved with its files) is kept;
+- undo and redo: a step from before a Save As restores paths written for the old folder; they are rebased too.
 Values are written as ID properties, not through the settings: the paths point at the same files, so nothing has to
 be rebuilt, and no update callback runs inside Blender's save.
 """
@@ -24,7 +25,7 @@ FOLDER_PROPERTY = "paths_folder"
 # 4.5 and later warn when a '//' path is stored in a path property not declared to accept one.
 BLEND_RELATIVE_OPTIONS = {"PATH_SUPPORTS_BLEND_RELATIVE"} if bpy.app.version >= (4, 5, 0) else set()
 
-# Values replaced for a Save Copy, put back after it: object name -> {property: value}.
+# Values replaced for a Save As / Save Copy, put back after a copy or a failed save: object name -> {property: value}.
 _before_copy = {}
 
 
@@ -76,7 +77,8 @@ def _rebase_all(old_folder, new_folder, keep_resolving=False):
                 continue
             before[prop] = getattr(settings, prop)
             settings[prop] = new
-        settings[FOLDER_PROPERTY] = new_folder
+        if settings.get(FOLDER_PROPERTY) != new_folder:  # unchanged values are not written (undo calls this too)
+            settings[FOLDER_PROPERTY] = new_folder
         changed[name] = before
     return changed
 
@@ -98,14 +100,33 @@ def after_save(filepath=None):
     current = blend_folder(bpy.data.filepath)
     target = blend_folder(filepath) if isinstance(filepath, str) and filepath else ""
     if target and os.path.normcase(target) != os.path.normcase(current):  # a copy: put the open file's back
-        for name, values in _before_copy.items():
-            obj = bpy.data.objects.get(name)
-            if obj is not None:
-                for prop, value in values.items():
-                    obj.meniscus[prop] = value
+        _restore_before_save()
     _before_copy.clear()
     if not target and current:
         _rebase_all(current, current)  # each surface from its recorded folder to the file's new one
+
+
+def after_failed_save(filepath=None):
+    """save_post_fail (4.2+; save_post does not run): nothing was written and the open file stays where it was, so
+    it keeps the paths it had before save_pre rewrote them."""
+    _restore_before_save()
+    _before_copy.clear()
+
+
+def after_undo():
+    """undo_post / redo_post: undo restores the paths as its step stored them, possibly for the folder the .blend
+    was in before a Save As since; each is rebased from its recorded folder to the file's."""
+    current = blend_folder(bpy.data.filepath)
+    if current:
+        _rebase_all(current, current)
+
+
+def _restore_before_save():
+    for name, values in _before_copy.items():
+        obj = bpy.data.objects.get(name)
+        if obj is not None:
+            for prop, value in values.items():
+                obj.meniscus[prop] = value
 
 
 def after_load():

@@ -99,6 +99,13 @@ def forget_cached_state():
     _memory.forget()
 
 
+def forget_handled_failures():
+    """A new render applies its own failure policy to frames that failed before (in the viewport, an export or an
+    earlier render): they are marked as not handled, so the render rebuilds them instead of keeping what they show."""
+    for pointer, (key, _handled) in list(_memory.failed.items()):
+        _memory.failed[pointer] = (key, False)
+
+
 def forget_frames(obj):
     """Drops the frames kept for a surface and the work queued for it (its parameters changed)."""
     try:
@@ -113,12 +120,18 @@ def forget_frames(obj):
 def release_removed_surfaces():
     """Drops the frames kept for meshes that no surface in any scene shows any more (the surface was deleted, unlinked
     or switched off): nothing else would free them until a file is loaded. Returns how many meshes were released."""
+    def shows(obj, pointer):
+        return is_surface(obj) and obj.data.as_pointer() == pointer and len(obj.users_scene) > 0
+
     gone = []
     for pointer in set(_memory.frames) | set(_memory.shown):  # one per surface: no walk over every object
         try:
-            obj = bpy.data.objects.get(_memory.owners.get(pointer, ""))
-            # A renamed surface is not found either: its frames are built again, which only costs time.
-            kept = is_surface(obj) and obj.data.as_pointer() == pointer and len(obj.users_scene) > 0
+            kept = shows(bpy.data.objects.get(_memory.owners.get(pointer, "")), pointer)
+            if not kept:  # renamed, or gone: only then are the objects walked, for one showing the same mesh
+                renamed = next((obj for obj in bpy.data.objects if shows(obj, pointer)), None)
+                kept = renamed is not None
+                if kept:
+                    _memory.owners[pointer] = renamed.name
         except Exception:  # data being freed (a file loading): the load handler forgets everything anyway
             kept = False
         if not kept:
@@ -569,7 +582,9 @@ def update_surface(obj, scene, force=False, depsgraph=None):
                 _memory.shown.pop(pointer, None)
             else:
                 _memory.shown[pointer] = (key, len(mesh.vertices))
-                _memory.failed[pointer] = (key, for_render)
+                # An export under Stop fails afterwards rather than applying the render's policy: not handled for
+                # a render, so a later F12 at this frame applies its own.
+                _memory.failed[pointer] = (key, for_render and not exported)
             _set_status(settings, status, is_error=True)
         except Exception:
             traceback.print_exc()
