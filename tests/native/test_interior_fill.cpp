@@ -219,7 +219,7 @@ TEST_CASE("the pipeline fills a narrow band into solid water, on request or by i
     CHECK(count_of(run_pipeline(view(particles), {}, options).stats, "interior_fill_particles") == -1.0);
 }
 
-TEST_CASE("the fill refuses what it cannot use, naming it", "[interior_fill][bad_input]") {
+TEST_CASE("the fill refuses what it cannot use, naming it", "[interior_fill][bad-input]") {
     const std::vector<float> particles = particles_where(8, [](double, double, double z) { return z < 3; });
     PipelineOptions options;
     options.reconstruction.particle_radius = 0.25 * kCell;
