@@ -16,6 +16,7 @@ import pytest
 
 import meniscus
 from conftest import BUILD, ROOT
+from test_mantaflow import enclosed_volume as volume, winding_numbers
 
 FRAMES = range(1, 25)
 CELL = 2.0 / 32
@@ -32,12 +33,6 @@ def bakes():
 
 def mantaflow_volumes(bakes, scene):
     return {int(f): v for f, v in json.loads((bakes / f"{scene}_UNI/scene.json").read_text())["mantaflow_mesh_volume"].items()}
-
-
-def volume(mesh):
-    v = np.asarray(mesh.vertices, dtype=float)
-    t = np.asarray(mesh.all_triangles())
-    return np.einsum("ij,ij->i", v[t[:, 0]], np.cross(v[t[:, 1]], v[t[:, 2]])).sum() / 6.0
 
 
 def narrow_band(particles):
@@ -84,21 +79,6 @@ def test_without_the_fill_the_band_is_hollow(bakes):
     frame = 20
     hollow = volume(reconstruct_frame(bakes, "pool", frame, fill_interior=0))
     assert hollow < 0.5 * mantaflow_volumes(bakes, "pool")[frame]
-
-
-def winding_numbers(mesh, points):
-    """Generalised winding number of a closed triangle mesh at each point: ~1 inside, ~0 outside."""
-    vertices = np.asarray(mesh.vertices, dtype=float)
-    triangles = np.asarray(mesh.all_triangles())
-    out = []
-    for p in points:
-        a, b, c = (vertices[triangles[:, k]] - p for k in range(3))
-        la, lb, lc = (np.linalg.norm(v, axis=1) for v in (a, b, c))
-        det = np.einsum("ij,ij->i", a, np.cross(b, c))
-        den = la * lb * lc + np.einsum("ij,ij->i", a, b) * lc + np.einsum("ij,ij->i", b, c) * la + \
-            np.einsum("ij,ij->i", c, a) * lb
-        out.append(np.arctan2(det, den).sum() / (2 * np.pi))
-    return np.array(out)
 
 
 @pytest.mark.parametrize("scene, frame", [("pool", 12), ("moving_obstacle", 20)])
