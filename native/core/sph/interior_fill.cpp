@@ -21,7 +21,7 @@ constexpr double kShellReach = 1.0;
 // More lattice points per cell edge than this would only mean a particle radius far below the solver's cells.
 constexpr int kMaxPointsPerEdge = 8;
 // In shell cells a lattice point is added only this many lattice spacings or further from every particle: it fills
-// the band's gaps without crowding its particles (measured on the baked pools: 1.0 leaves holes, 0.75 does not).
+// the band's gaps, but a particle of the band at its rest spacing keeps the lattice points around it away.
 constexpr double kKeepAway = 0.75;
 
 using Vec3 = std::array<double, 3>;
