@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <vector>
 
 #include "base/errors.h"
@@ -217,6 +218,18 @@ TEST_CASE("the pipeline fills a narrow band into solid water, on request or by i
     domain.band_width_cells = 0.0;  // the whole liquid has particles: automatic does not fill
     options.reconstruction.fill_interior = -1;
     CHECK(count_of(run_pipeline(view(particles), {}, options).stats, "interior_fill_particles") == -1.0);
+}
+
+TEST_CASE("particles and obstacles far outside the grid, or not finite, are left out", "[interior_fill][bad-input]") {
+    FluidDomain domain = closed_domain(24);
+    std::vector<float> particles = particles_where(24, pool_band);
+    const InteriorFill reference = fill_interior(view(particles), domain, 0.5 * kCell, 2, 0);
+    const float far = 1e30f, nan = std::numeric_limits<float>::quiet_NaN();
+    particles.insert(particles.end(), {far, far, far, -far, 0.5f, 0.5f, nan, 0.5f, 0.5f});
+    domain.obstacles.push_back({far, far, far, -far, far, far, far, -far, far});
+    const InteriorFill fill = fill_interior(view(particles), domain, 0.5 * kCell, 2, 0);
+    CHECK(fill.classification.cells == reference.classification.cells);
+    CHECK(fill.positions == reference.positions);
 }
 
 TEST_CASE("the fill refuses what it cannot use, naming it", "[interior_fill][bad-input]") {

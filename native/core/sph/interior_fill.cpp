@@ -120,8 +120,10 @@ void voxelize_obstacles(const FluidDomain& domain, const GridMap& map, const Gri
             if (area == 0.0) continue;
             const double lo_x = std::min({p[0][0], p[1][0], p[2][0]}), hi_x = std::max({p[0][0], p[1][0], p[2][0]});
             const double lo_y = std::min({p[0][1], p[1][1], p[2][1]}), hi_y = std::max({p[0][1], p[1][1], p[2][1]});
-            const int i0 = std::max(0, int(std::ceil(lo_x - 0.5))), i1 = std::min(grid.n[0] - 1, int(std::floor(hi_x - 0.5)));
-            const int j0 = std::max(0, int(std::ceil(lo_y - 0.5))), j1 = std::min(grid.n[1] - 1, int(std::floor(hi_y - 0.5)));
+            // Clamped to the grid before the conversion to int: an obstacle far outside must not overflow it.
+            const auto column = [](double x, int n) { return int(std::clamp(x, -1.0, double(n))); };
+            const int i0 = std::max(0, column(std::ceil(lo_x - 0.5), grid.n[0])), i1 = std::min(grid.n[0] - 1, column(std::floor(hi_x - 0.5), grid.n[0]));
+            const int j0 = std::max(0, column(std::ceil(lo_y - 0.5), grid.n[1])), j1 = std::min(grid.n[1] - 1, column(std::floor(hi_y - 0.5), grid.n[1]));
             for (int j = j0; j <= j1; ++j)
                 for (int i = i0; i <= i1; ++i) {
                     // Sampled a hair off the centre, so that a ray through a shared edge or vertex counts once.
@@ -143,8 +145,8 @@ void voxelize_obstacles(const FluidDomain& domain, const GridMap& map, const Gri
         std::size_t e = s;
         while (e < crossings.size() && crossings[e].first == column) ++e;
         for (std::size_t a = s; a + 1 < e; a += 2) {
-            const int k0 = std::max(0, int(std::ceil(crossings[a].second - 0.5)));
-            const int k1 = std::min(grid.n[2] - 1, int(std::floor(crossings[a + 1].second - 0.5)));
+            const int k0 = std::max(0, int(std::clamp(std::ceil(crossings[a].second - 0.5), -1.0, double(grid.n[2]))));
+            const int k1 = std::min(grid.n[2] - 1, int(std::clamp(std::floor(crossings[a + 1].second - 0.5), -1.0, double(grid.n[2]))));
             for (int k = k0; k <= k1; ++k) cells[column + grid.stride[2] * k] = CellClass::solid;
         }
         s = e;
@@ -246,6 +248,11 @@ InteriorClassification classify_interior(const PositionsView& positions, const F
         std::array<int, 3> lo{}, hi{};
         bool outside = false;
         for (int a = 0; a < 3; ++a) {
+            // Out of reach of the grid: skipped before any conversion to int (far-away particles would overflow it).
+            if (!(g[a] > -kShellReach && g[a] < grid.n[a] + kShellReach)) {
+                outside = true;
+                break;
+            }
             lo[a] = int(std::max(0.0, std::floor(g[a] - kShellReach)));
             hi[a] = int(std::min(double(grid.n[a] - 1), std::floor(g[a] + kShellReach)));
             outside = outside || lo[a] > hi[a];
