@@ -142,3 +142,11 @@ def test_a_submerged_obstacle_is_left_empty_when_described(bakes):
     reference = mantaflow_volumes(bakes, "moving_obstacle")[frame]
     assert abs(volume(described) / reference - 1.0) <= 0.05
     assert volume(unknown) - volume(described) == pytest.approx(0.4 ** 3, rel=0.35)
+
+
+def test_the_filled_surface_is_the_same_for_every_thread_count(bakes):
+    one = reconstruct_frame(bakes, "pool", 12, threads=1)
+    assert one.stats["counts"]["interior_fill_particles"] > 10000
+    for threads in (2, 3):
+        many = reconstruct_frame(bakes, "pool", 12, threads=threads)
+        assert np.array_equal(many.vertices, one.vertices) and np.array_equal(many.triangles, one.triangles)
