@@ -183,6 +183,17 @@ def main():
           struct.pack("<i", 4) + tetrahedron.tobytes() + struct.pack("<i", 4) + tetrahedron.tobytes() +
           struct.pack("<i", 4) + np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], "<i4").tobytes())
 
+    # OpenVDB points: Blender 3.4's Mantaflow bake of the test data (a velocity grid and a point grid in LZ4 Blosc).
+    write("vdb", "mantaflow_pool.vdb", (ROOT / "tests/data/mantaflow/cache/data/fluid_data_0001.vdb").read_bytes())
+    # Blosc frames (one block each): BloscLZ with a match, LZ4 with a match, LZ4 byte-shuffled, stored.
+    def blosc(flags, typesize, nbytes, stream):
+        return (bytes([2, 1, flags, typesize]) + struct.pack("<5I", nbytes, nbytes, 24 + len(stream), 20, len(stream)) +
+                bytes(stream))
+    write("blosc", "blosclz.blosc", blosc(0x10, 1, 8, [0x02, 97, 98, 99, 0x60, 0x02]))
+    write("blosc", "lz4.blosc", blosc(0x30, 1, 10, [0x31, 97, 98, 99, 3, 0, 0x20, 88, 89]))
+    write("blosc", "lz4_shuffle.blosc", blosc(0x31, 4, 8, [0x80, 4, 8, 3, 7, 2, 6, 1, 5]))
+    write("blosc", "stored.blosc", bytes([2, 1, 2, 1]) + struct.pack("<3I", 3, 3, 19) + b"xyz")
+
     total = sum(f.stat().st_size for f in CORPUS.rglob("*") if f.is_file())
     print(f"corpus: {sum(1 for f in CORPUS.rglob('*') if f.is_file())} seeds, {total / 1e3:.0f} kB")
 
