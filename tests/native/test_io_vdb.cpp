@@ -3,6 +3,7 @@
 // grid with half-float offsets in LZ4 Blosc pages); tests/python/test_mantaflow.py compares larger bakes with the
 // UNI cache of the same simulation.
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cstring>
 #include <string>
 #include <vector>
