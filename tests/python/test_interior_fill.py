@@ -32,7 +32,8 @@ def bakes():
 
 
 def mantaflow_volumes(bakes, scene):
-    return {int(f): v for f, v in json.loads((bakes / f"{scene}_UNI/scene.json").read_text())["mantaflow_mesh_volume"].items()}
+    bake = scene if scene.endswith(("_UNI", "_OPENVDB")) else f"{scene}_UNI"
+    return {int(f): v for f, v in json.loads((bakes / bake / "scene.json").read_text())["mantaflow_mesh_volume"].items()}
 
 
 def narrow_band(particles):
@@ -46,9 +47,10 @@ def reconstruct_frame(bakes, scene, frame, **parameters):
                                 **{**SETTINGS, **parameters})
 
 
-@pytest.mark.parametrize("scene", ["pool", "moving_obstacle"])
-def test_cli_fills_the_band_to_mantaflows_volume_at_every_frame(bakes, cli, tmp_path, scene):
-    result = subprocess.run([cli, "reconstruct", str(bakes / f"{scene}_UNI/cache/data/pp_{{}}.uni"), "-o",
+@pytest.mark.parametrize("scene, files", [("pool_UNI", "pp_{}.uni"), ("moving_obstacle_UNI", "pp_{}.uni"),
+                                          ("pool_OPENVDB", "fluid_data_{}.vdb")])  # Blender's default format
+def test_cli_fills_the_band_to_mantaflows_volume_at_every_frame(bakes, cli, tmp_path, scene, files):
+    result = subprocess.run([cli, "reconstruct", str(bakes / scene / "cache/data" / files), "-o",
                              str(tmp_path / "surface_{}.ply"), "-r", str(CELL / 2), "-t", "0.45", "--fill-interior", "1",
                              "-n", "2", "-s", "1", "-e", "24", "--stats", str(tmp_path / "stats.json")],
                             capture_output=True, text=True, timeout=900)
