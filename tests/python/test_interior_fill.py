@@ -69,10 +69,11 @@ def test_python_api_fills_the_open_top_pool_to_mantaflows_volume_at_every_frame(
         particles = meniscus.read_particles(bakes / f"open_top_UNI/cache/data/pp_{frame:04d}.uni")
         domain = narrow_band(particles)
         domain["closed_borders"] = [True] * 5 + [False]  # the scene's open top (the add-on reads it from the domain)
-        mesh = meniscus.reconstruct(particles.positions, CELL / 2, attributes=particles.attributes,
-                                    fluid_domain=domain, **SETTINGS)
+        attributes = particles.attributes if frame == 12 else None  # carried through the fill (once: it costs)
+        mesh = meniscus.reconstruct(particles.positions, CELL / 2, attributes=attributes, fluid_domain=domain, **SETTINGS)
         ratios[frame] = volume(mesh) / reference[frame]
-        assert "velocity" in mesh.attributes
+        if attributes:
+            assert np.isfinite(mesh.attributes["velocity"]).all() and len(mesh.attributes["velocity"]) == len(mesh.vertices)
     assert all(abs(r - 1.0) <= 0.05 for r in ratios.values()), {f: round(r, 3) for f, r in ratios.items()}
 
 
