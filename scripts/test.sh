@@ -40,6 +40,9 @@ version="$(sed -n 's/^project(meniscus VERSION \([0-9.]*\).*/\1/p' CMakeLists.tx
 extension="dist/meniscus-$version-linux_x64.zip"
 legacy="dist/meniscus-$version-legacy-linux_x64.zip"
 
+section "Mantaflow caches baked by Blender 3.4 (tests/mantaflow/bake.sh)"
+bash tests/mantaflow/bake.sh /usr/bin/blender
+
 section "Python tests (pytest: API, CLI, quality, packages)"
 /usr/bin/python3 -m pytest -q --durations=10 tests/python
 

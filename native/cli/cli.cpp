@@ -326,6 +326,7 @@ json run_frame(const ReconstructArgs& args, const std::string& input, const std:
     PipelineOptions options;
     static_cast<Parameters&>(options) = args.parameters;
     options.keep_raw_mesh = !raw_output.empty();
+    if (particles.fluid_domain) options.fluid_domain = &*particles.fluid_domain;  // a grid solver's cache: the narrow-band fill
     PipelineResult result;
     try {
         result = run_pipeline(PositionsView(particles.positions.data(), particles.size()), inputs, options);

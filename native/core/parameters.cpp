@@ -119,6 +119,12 @@ std::vector<ParameterSpec> make_schema() {
                     .cli("-t,--surface-threshold").positive().soft(0.1, 1.5)
                     .help("Where the surface lies, as a fraction of the fluid's density: higher pulls it in (thinner "
                           "splashes), lower pushes it out (fuller, more merged drops)").done());
+    s.push_back(Spec::count("fill_interior", &R::fill_interior, surface).group("surface").label("Fill Interior")
+                    .cli("--fill-interior").range(0, 1).automatic(-1.0, "auto", 1.0)
+                    .help("Make solid water from particles kept only in a band under the liquid's surface (Mantaflow's "
+                          "FLIP particles): what the band encloses, bounded by the domain's walls and obstacles, is "
+                          "filled with particles. 1: on (the particles must come with their fluid domain), 0: off; "
+                          "automatic: on when they come from a narrow band (Mantaflow's cache)").done());
 
     // ---- mesh (Sec. 3.3) --------------------------------------------------------------------------------------
     s.push_back(Spec::flag("decimate_barnacles", &P::decimate_barnacles, post).group("mesh").label("Remove Barnacles")

@@ -23,6 +23,7 @@ struct ReconstructionParams {
     double smoothing_length = 2.0;  // l, multiple of r; kernel compact support H = 2 * l * r
     double cube_size = 0.5;         // c, marching-cubes cube edge as a multiple of r
     double iso_threshold = 0.6;     // t, inside where the colour field exceeds t
+    int fill_interior = -1;         // narrow-band fill (sph/interior_fill.h): 1 on, 0 off, -1 when a narrow band's domain comes with the particles
 
     double compact_support() const { return 2.0 * smoothing_length * particle_radius; }
     double cube_edge() const { return cube_size * particle_radius; }

@@ -4,6 +4,7 @@
 #include <string>
 #include <utility>
 
+#include "base/errors.h"
 #include "base/parallel.h"
 #include "mesh/adjacency.h"
 #include "post/container.h"
@@ -17,18 +18,79 @@
 #include "post/vertex_guard.h"
 #include "post/volume.h"
 #include "post/weights.h"
+#include "sph/interior_fill.h"
 #include "sph/interpolation.h"
 #include "surface/reconstruction.h"
 
 namespace meniscus {
 
-PipelineResult run_pipeline(const PositionsView& positions, const std::vector<AttributeInput>& attributes, const PipelineOptions& options) {
+namespace {
+
+// The particles with the narrow-band fill's after them (sph/interior_fill.h), each fill particle taking its source
+// particle's attributes; the positions keep the caller's precision.
+struct FilledParticles {
+    std::vector<float> f32;
+    std::vector<double> f64;
+    std::vector<std::vector<float>> attribute_values;
+    std::vector<AttributeInput> attributes;
+    PositionsView view;
+};
+
+bool wants_fill(const PipelineOptions& options) {
+    const int fill = options.reconstruction.fill_interior;
+    if (fill == 1 && !options.fluid_domain)
+        throw InputError("fill_interior is on, but the particles come without their fluid domain (a grid solver's cache such as "
+                         "Mantaflow's carries one): use automatic or off");
+    return options.fluid_domain && (fill == 1 || (fill == -1 && narrow_band_domain(*options.fluid_domain)));
+}
+
+void fill_narrow_band(const PositionsView& positions, const std::vector<AttributeInput>& attributes, const PipelineOptions& options,
+                      FilledParticles& out, PipelineStats& stats) {
+    StageTimer timer(&stats, "interior fill");
+    const InteriorFill fill = fill_interior(positions, *options.fluid_domain, 2.0 * options.reconstruction.particle_radius,
+                                            options.execution.threads, options.execution.memory_budget_bytes());
+    const std::size_t n = positions.count, added = fill.source.size();
+    if (positions.f64) {
+        out.f64.assign(positions.f64, positions.f64 + 3 * n);
+        out.f64.insert(out.f64.end(), fill.positions.begin(), fill.positions.end());
+        out.view = PositionsView(out.f64.data(), n + added);
+    } else {
+        out.f32.assign(positions.f32, positions.f32 + 3 * n);
+        out.f32.insert(out.f32.end(), fill.positions.begin(), fill.positions.end());
+        out.view = PositionsView(out.f32.data(), n + added);
+    }
+    out.attribute_values.reserve(attributes.size());
+    for (const AttributeInput& a : attributes) {
+        const std::size_t k = static_cast<std::size_t>(a.components);
+        std::vector<float> values(a.values, a.values + k * n);
+        values.resize(k * (n + added));
+        for (std::size_t f = 0; f < added; ++f)
+            std::copy(a.values + k * fill.source[f], a.values + k * (fill.source[f] + 1), values.begin() + k * (n + f));
+        out.attribute_values.push_back(std::move(values));
+        out.attributes.push_back({a.name, out.attribute_values.back().data(), a.components, a.integral});
+    }
+    const InteriorClassification& cells = fill.classification;
+    stats.set_count("interior_fill_particles", static_cast<double>(added));
+    stats.set_count("interior_fill_liquid_cells", static_cast<double>(cells.count(CellClass::liquid)));
+    stats.set_count("interior_fill_shell_cells", static_cast<double>(cells.count(CellClass::shell)));
+    stats.set_count("interior_fill_regions_split", static_cast<double>(cells.split_components));
+}
+
+}  // namespace
+
+PipelineResult run_pipeline(const PositionsView& given_positions, const std::vector<AttributeInput>& given_attributes, const PipelineOptions& options) {
     validate(static_cast<const Parameters&>(options));
-    validate_attribute_inputs(attributes, positions.count);
+    validate_attribute_inputs(given_attributes, given_positions.count);
+    PipelineResult result;
+    // The narrow-band fill: solid water from a shell of particles, before anything else sees them.
+    FilledParticles filled;
+    const bool fill = wants_fill(options);
+    if (fill) fill_narrow_band(given_positions, given_attributes, options, filled, result.stats);
+    const PositionsView& positions = fill ? filled.view : given_positions;
+    const std::vector<AttributeInput>& attributes = fill ? filled.attributes : given_attributes;
     const ReconstructionParams& surface = options.reconstruction;
     const PostprocessParams& post = options.postprocess;
     const int threads = resolve_threads(options.execution.threads);
-    PipelineResult result;
     PipelineStats& stats = result.stats;
     if (positions.count == 0) stats.warnings.push_back("no particles: the mesh is empty");
 

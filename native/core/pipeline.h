@@ -16,6 +16,8 @@ namespace meniscus {
 
 struct PipelineOptions : Parameters {
     bool keep_raw_mesh = false;  // also return the mesh as marching cubes made it
+    // The grid solver's domain the particles come from (ParticleData::fluid_domain), for the narrow-band fill.
+    const FluidDomain* fluid_domain = nullptr;
 };
 
 struct PipelineResult {

@@ -19,6 +19,7 @@
 #include "io/io.h"
 #include "parameters.h"
 #include "pipeline.h"
+#include "sph/interior_fill.h"
 #include "analysis/quality.h"
 #include "analysis/scale_metrics.h"
 #include "mesh/adjacency.h"
@@ -191,7 +192,58 @@ Parameters parameters_from_python(const py::dict& values) {
     return parameters;
 }
 
-py::dict reconstruct(const py::array& positions, const py::dict& attributes, const py::dict& parameters, bool keep_raw_mesh) {
+// A fluid domain (sph/fluid_domain.h) as a dict with the struct's field names, each optional; obstacles a list of
+// (T, 3, 3) or flat float arrays of world-space triangles. Errors name the key.
+template <class T>
+T domain_field(const py::dict& values, const char* key, const char* expected, T value) {
+    if (!values.contains(key)) return value;
+    try {
+        return values[key].cast<T>();
+    } catch (const py::cast_error&) {
+        throw InputError(std::string("fluid_domain['") + key + "'] must be " + expected + ", got " + py::repr(values[key]).cast<std::string>());
+    }
+}
+
+FluidDomain fluid_domain_from_python(const py::dict& values) {
+    static const char* const keys[] = {"origin", "axes", "resolution", "closed_borders", "gravity", "band_width_cells", "obstacles"};
+    for (const auto& item : values) {
+        const std::string key = py::str(item.first);
+        if (std::find_if(std::begin(keys), std::end(keys), [&](const char* k) { return key == k; }) == std::end(keys))
+            throw InputError("fluid_domain has no key '" + key + "' (the keys are: origin, axes, resolution, closed_borders, gravity, "
+                             "band_width_cells, obstacles)");
+    }
+    FluidDomain d;
+    d.origin = domain_field(values, "origin", "three numbers", d.origin);
+    d.axes = domain_field(values, "axes", "three cell edges of three numbers each", d.axes);
+    d.resolution = domain_field(values, "resolution", "three whole numbers", d.resolution);
+    d.closed_borders = domain_field(values, "closed_borders", "six True/False (-x, +x, -y, +y, -z, +z)", d.closed_borders);
+    d.gravity = domain_field(values, "gravity", "three numbers", d.gravity);
+    d.band_width_cells = domain_field(values, "band_width_cells", "a number", d.band_width_cells);
+    if (values.contains("obstacles"))
+        for (const auto& soup : values["obstacles"].cast<py::list>()) {
+            const py::array_t<float, py::array::c_style | py::array::forcecast> triangles(py::reinterpret_borrow<py::object>(soup));
+            d.obstacles.emplace_back(triangles.data(), triangles.data() + triangles.size());
+        }
+    validate_fluid_domain(d);
+    return d;
+}
+
+py::dict fluid_domain_to_python(const FluidDomain& d) {
+    py::dict out;
+    out["origin"] = d.origin;
+    out["axes"] = d.axes;
+    out["resolution"] = d.resolution;
+    out["closed_borders"] = d.closed_borders;
+    out["gravity"] = d.gravity;
+    out["band_width_cells"] = d.band_width_cells;
+    py::list obstacles;
+    for (const std::vector<float>& soup : d.obstacles) obstacles.append(to_numpy(std::vector<float>(soup), {py::ssize_t(soup.size() / 9), 3, 3}));
+    out["obstacles"] = obstacles;
+    return out;
+}
+
+py::dict reconstruct(const py::array& positions, const py::dict& attributes, const py::dict& parameters, bool keep_raw_mesh,
+                     const py::object& fluid_domain) {
     const PositionsView view = positions_view(positions);
     std::vector<AttributeInput> inputs;
     std::vector<AttributeArray> arrays;
@@ -204,6 +256,13 @@ py::dict reconstruct(const py::array& positions, const py::dict& attributes, con
     PipelineOptions options;
     static_cast<Parameters&>(options) = parameters_from_python(parameters);
     options.keep_raw_mesh = keep_raw_mesh;
+    std::optional<FluidDomain> domain;
+    if (!fluid_domain.is_none()) {
+        if (!py::isinstance<py::dict>(fluid_domain))
+            throw InputError("fluid_domain must be None or a dict (origin, axes, resolution, ...), got " + py::repr(fluid_domain).cast<std::string>());
+        domain = fluid_domain_from_python(fluid_domain.cast<py::dict>());
+        options.fluid_domain = &*domain;
+    }
 
     PipelineResult result;
     {
@@ -227,6 +286,7 @@ py::dict read_particle_file(const std::string& path) {
     const py::ssize_t n = static_cast<py::ssize_t>(data.size());
     out["positions"] = to_numpy(std::move(data.positions), {n, 3});
     out["attributes"] = attributes_to_dict(std::move(data.attributes));
+    out["fluid_domain"] = data.fluid_domain ? py::object(fluid_domain_to_python(*data.fluid_domain)) : py::object(py::none());
     return out;
 }
 
@@ -355,7 +415,7 @@ PYBIND11_MODULE(_core, m) {
     });
 
     m.def("reconstruct", &reconstruct, py::arg("positions"), py::arg("attributes"), py::arg("parameters"),
-          py::arg("keep_raw_mesh") = false,
+          py::arg("keep_raw_mesh") = false, py::arg("fluid_domain") = py::none(),
           "Runs the pipeline on (N, 3) float32/float64 positions with parameters named as in parameter_schema(); "
           "returns a dict of numpy arrays and stats.");
     m.def("parameter_schema", &schema_to_list, "Every pipeline parameter: name, type, default, range, unit, help, spellings.");

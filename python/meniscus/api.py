@@ -32,6 +32,9 @@ class Particles:
     positions: np.ndarray                      # (N, 3) float32
     # (N,) or (N, k): float32, or int32 for whole-number fields of the file (ids, labels)
     attributes: Dict[str, np.ndarray] = field(default_factory=dict)
+    # The grid solver's domain from its cache (Mantaflow), as a dict mirroring FluidDomain (origin, axes, resolution,
+    # closed_borders, gravity, band_width_cells, obstacles); None for other files. reconstruct() takes it.
+    fluid_domain: Optional[dict] = None
 
     def __len__(self) -> int:
         return len(self.positions)
@@ -78,11 +81,11 @@ def _mesh(result: dict) -> Mesh:
 def read_particles(path) -> Particles:
     """Reads a particle file (legacy VTK, BGEO); raises FormatError naming the file and the fault."""
     data = _core.read_particles(str(path))
-    return Particles(data["positions"], data["attributes"])
+    return Particles(data["positions"], data["attributes"], data.get("fluid_domain"))
 
 
 def reconstruct(positions, particle_radius, *, attributes: Optional[Dict[str, np.ndarray]] = None,
-                keep_raw_mesh: bool = False, **parameters) -> Mesh:
+                keep_raw_mesh: bool = False, fluid_domain: Optional[dict] = None, **parameters) -> Mesh:
     # The signature and the parameters' documentation are filled in from the schema below (see parameters.py).
     unknown = sorted(set(parameters) - set(_parameters.BY_NAME))
     if unknown:
@@ -92,7 +95,7 @@ def reconstruct(positions, particle_radius, *, attributes: Optional[Dict[str, np
     for name, values in (attributes or {}).items():
         converted[str(name)] = _attribute_array(values)
     result = _core.reconstruct(positions, converted, {"particle_radius": particle_radius, **parameters},
-                               bool(keep_raw_mesh))
+                               bool(keep_raw_mesh), fluid_domain)
     mesh = _mesh(result)
     mesh.stats = result["stats"]
     mesh.weights_normalization = result["weights_normalization"]
@@ -107,11 +110,15 @@ def _document_reconstruct():
     signature = [inspect.Parameter("positions", inspect.Parameter.POSITIONAL_OR_KEYWORD),
                  inspect.Parameter("particle_radius", inspect.Parameter.POSITIONAL_OR_KEYWORD),
                  inspect.Parameter("attributes", keyword, default=None),
-                 inspect.Parameter("keep_raw_mesh", keyword, default=False)]
+                 inspect.Parameter("keep_raw_mesh", keyword, default=False),
+                 inspect.Parameter("fluid_domain", keyword, default=None)]
     lines = ["Reconstructs the fluid surface of (N, 3) float32/float64 C-contiguous positions (read without a copy).",
              "",
              "attributes: per-particle arrays to carry onto the surface (float: interpolated; integer: from the",
              "    nearest particle). keep_raw_mesh: also return the marching-cubes mesh as mesh.raw.",
+             "fluid_domain: the grid solver's domain the particles come from (Particles.fluid_domain, or a dict with",
+             "    origin, axes, resolution, closed_borders, gravity, band_width_cells, obstacles): the interior fill",
+             "    (fill_interior) makes solid water from a narrow band of particles with it.",
              "Raises ValueError naming a bad argument, MemoryError (with the estimate) beyond the memory budget.",
              "",
              "Parameters (the same as the command line's flags and the Blender add-on's properties):"]

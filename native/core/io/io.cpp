@@ -10,6 +10,7 @@
 #include <memory>
 #include <utility>
 
+#include "io/formats/mantaflow.h"
 #include "io/io_util.h"
 #include "io/mesh_writer.h"
 #include "base/platform.h"
@@ -60,7 +61,7 @@ bool ends_with(std::string_view s, std::string_view suffix) {
     return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-enum class ParticleFormat { unknown, vtk, bgeo, houdini_json, vtu, ply, npy, npz, csv, xyz };
+enum class ParticleFormat { unknown, vtk, bgeo, houdini_json, vtu, ply, npy, npz, csv, xyz, mantaflow_uni, vdb };
 
 // Houdini's ASCII JSON geometry: a JSON array whose first keys (within the first KiB) include "fileversion" or
 // "pointcount".
@@ -117,6 +118,9 @@ ParticleFormat detect_particle_format(const Bytes& b) {
     // Houdini's Blosc-compressed .sc container.
     if (starts_with(b, "scf1")) return ParticleFormat::unknown;
     if (starts_with(b, "ply\n") || starts_with(b, "ply\r")) return ParticleFormat::ply;
+    // Mantaflow (Blender's fluid cache) particle systems; the PB01 and PD01 files go there to be named in its error.
+    if (starts_with(b, "PB02") || starts_with(b, "PB01")) return ParticleFormat::mantaflow_uni;
+    if (starts_with(b, " BDV")) return ParticleFormat::vdb;  // OpenVDB (point data grids)
     if (starts_with(b, "\x93NUMPY")) return ParticleFormat::npy;
     if (starts_with(b, "PK\x03\x04") || starts_with(b, "PK\x05\x06")) return ParticleFormat::npz;
     if (looks_like_xml(b)) return ParticleFormat::vtu;
@@ -141,6 +145,11 @@ ParticleData read_particles_from_bytes(const std::string& path, Bytes bytes) {
         if (ends_with(lower_path, ".sc") || starts_with(bytes, "scf1"))
             fail(path, "Houdini Blosc-compressed geometry (.sc) is not supported (meniscus has no Blosc decoder); save "
                        "the cache as .bgeo or .bgeo.gz, or convert it with Houdini's gconvert");
+        if (starts_with(bytes, "PD01"))
+            fail(path, "Mantaflow particle data (such as the velocities in pVel_####.uni) holds no positions: read the "
+                       "frame's particle file pp_####.uni, which takes its velocities from here");
+        if (starts_with(bytes, "MNT") || starts_with(bytes, "M4T"))
+            fail(path, "a Mantaflow grid (such as vel_####.uni), not particles: read the frame's particle file pp_####.uni");
         if (ext == ".vtk")
             format = ParticleFormat::vtk;
         else if (ext == ".bgeo" || ext == ".bhclassic" || lower_path.find(".bgeo") != std::string::npos)
@@ -161,8 +170,8 @@ ParticleData read_particles_from_bytes(const std::string& path, Bytes bytes) {
             format = ParticleFormat::xyz;
         else
             fail(path, "unknown particle file format: the content is none of legacy VTK ('# vtk DataFile'), VTK XML "
-                       "('<VTKFile'), BGEO ('BgeoV' or Houdini JSON geometry), PLY ('ply'), NumPy ('\\x93NUMPY' or a zip), or CSV with an x,y,z "
-                       "header, plain or gzip-compressed; raw float32 XYZ files need the extension .xyz");
+                       "('<VTKFile'), BGEO ('BgeoV' or Houdini JSON geometry), PLY ('ply'), NumPy ('\\x93NUMPY' or a zip), Mantaflow UNI ('PB02'), or CSV with "
+                       "an x,y,z header, plain or gzip-compressed; raw float32 XYZ files need the extension .xyz");
     }
     Source source{path, bytes.data(), bytes.size(), decompressed};
     switch (format) {
@@ -175,6 +184,8 @@ ParticleData read_particles_from_bytes(const std::string& path, Bytes bytes) {
         case ParticleFormat::npz: return read_npz_particles(source);
         case ParticleFormat::csv: return read_csv_particles(source);
         case ParticleFormat::xyz: return read_xyz_particles(source);
+        case ParticleFormat::mantaflow_uni: return read_mantaflow_uni_particles(source);
+        case ParticleFormat::vdb: return read_vdb_particles(source);
         case ParticleFormat::unknown: break;
     }
     fail(path, "unknown particle file format");
@@ -193,10 +204,12 @@ TriMesh read_mesh_from_bytes(const std::string& path, Bytes bytes) {
     if (starts_with(bytes, "# vtk DataFile")) return read_vtk_mesh(source);
     if (ext == ".ply") return read_ply_mesh(source);
     if (ext == ".obj") return read_obj_mesh(source);
+    // Mantaflow's own surface: fluid_mesh_####.bobj.gz (no magic; the name says it).
+    if (ext == ".bobj" || (decompressed && ends_with(to_lower(path), ".bobj.gz"))) return read_mantaflow_bobj_mesh(source);
     if (ext == ".vtk") return read_vtk_mesh(source);
     fail(path, "unknown mesh format: not PLY (no 'ply' header) or legacy VTK (no '# vtk DataFile' header) and the "
                "extension " + (ext.empty() ? std::string("is missing") : "'" + ext + "' is none of them") +
-               " (supported: .ply, .obj, .vtk)");
+               " (supported: .ply, .obj, .vtk) or Mantaflow's .bobj.gz");
 }
 
 }  // namespace io_detail

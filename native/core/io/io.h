@@ -14,7 +14,10 @@ namespace meniscus {
 // POLYDATA; POINT_DATA SCALARS / VECTORS / FIELD arrays), VTK XML .vtu / .vtp (ascii, base64, appended raw or base64,
 // zlib, either byte order), BGEO v5 (Partio layout), Houdini JSON geometry (binary .bgeo, ASCII .geo), PLY (ASCII
 // and binary vertex properties), raw float32 or text .xyz, NumPy .npy / .npz, CSV with an x, y, z header; any of
-// them gzip-compressed. Not supported, with a message naming the variant: Houdini .sc (Blosc), classic ASCII
+// them gzip-compressed; Mantaflow's UNI particle systems (Blender's fluid cache data/pp_####.uni: placed in the world
+// by the cache's config/config_####.uni, with the sibling pVel_####.uni as `velocity` in m/s, and
+// ParticleData::fluid_domain set); OpenVDB point data grids (.vdb: Houdini, Blender's Mantaflow data cache, read
+// without the OpenVDB library; Mantaflow's placed like its UNI files). Not supported, with a message naming the variant: Houdini .sc (Blosc), classic ASCII
 // PGEOMETRY, parallel .pvtu, non-zlib VTK compressors, pickled .npy.
 // Attributes become float32 arrays (ints converted), named as in the file. Legacy VTK "long" is read as 8 bytes (as
 // VTK writes it on 64-bit Unix). Decompression (gzip, VTK zlib blocks, .npz members) is capped at 64x the compressed
@@ -35,7 +38,8 @@ void write_particles(const ParticleData& particles, const std::string& path);
 
 // Reads a triangle mesh such as write_mesh writes (PLY binary/ASCII, OBJ, legacy VTK POLYDATA binary/ASCII; chosen by
 // the 'ply' or '# vtk DataFile' header, else by the extension), with normals and attributes where present; polygons
-// are fanned into triangles.
+// are fanned into triangles. Mantaflow's own surface (mesh/fluid_mesh_####.bobj.gz) is placed in the world by its
+// cache's config/config_####.uni, as Blender shows it (without normals).
 TriMesh read_mesh(const std::string& path);
 
 }  // namespace meniscus
