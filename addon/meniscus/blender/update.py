@@ -17,7 +17,7 @@ import traceback
 import bpy
 
 from .. import api, cache, playback, sequence
-from . import arguments as pipeline, mesh_update, render_policy, render_state, sources
+from . import arguments as pipeline, fluid_domain, mesh_update, render_policy, render_state, sources
 from .surfaces import STATUS_LINE_SEPARATOR, is_surface, surface_objects  # noqa: F401  (re-exported for callers)
 
 
@@ -351,21 +351,30 @@ def _load_cached_file(mesh, settings, path):
                          f"{loaded:.2f} s loading + {blender_seconds:.2f} s in Blender", attribute_note)
 
 
-def _object_source(obj, settings, mesh, depsgraph, for_render):
+def _object_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render):
     source = settings.source_object
     if source is None:
         raise SurfaceError("No source object set")
     if source == obj:
         raise SurfaceError("A surface cannot be its own source")
     wanted = cache.parse_attribute_names(settings.attribute_names)
-    positions, attributes, kind = sources.object_particles(source, depsgraph, wanted)
+    domain = None
+    if fluid_domain.is_liquid_domain(source):
+        positions, attributes, kind, particles = fluid_domain.read_particles(source, scene_time, api)
+        if fluid_domain.core_fills_narrow_band(api):
+            domain = fluid_domain.fluid_domain(source, scene, depsgraph, getattr(particles, "fluid_domain", None))
+    else:
+        positions, attributes, kind = sources.object_particles(source, depsgraph, wanted)
+    if len(positions) == 0:
+        raise SurfaceError(f"'{source.name}' has no particles at frame {int(round(scene_time))} ({kind})")
     arguments = reconstruction_arguments(settings, for_render)
     # The positions themselves are the key: the source may change without a frame change (an edit, a re-bake).
     key = ("OBJECT", source.name, sources.digest(positions), tuple(sorted(arguments.items())), tuple(wanted),
            settings.use_custom_normals)
 
     def work():
-        result = cache.reconstruct_positions(positions, attributes, arguments, wanted)
+        with_domain = arguments if domain is None else {**arguments, "fluid_domain": domain}
+        result = cache.reconstruct_positions(positions, attributes, with_domain, wanted)
         return _show_reconstruction(mesh, settings, f"{source.name}: {kind}" + (" (render)" if for_render else ""), result)
 
     return key, work, f"object '{source.name}'"
@@ -446,7 +455,7 @@ def update_surface(obj, scene, force=False, depsgraph=None):
                 # A live simulation moves at every shutter step; one surface per frame is enough (the velocity
                 # attribute carries the motion), so subframes keep what the frame built.
                 return False
-            key, work, source = _object_source(obj, settings, mesh, depsgraph, for_render)
+            key, work, source = _object_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render)
         else:
             key, work, source = _file_source(obj, settings, mesh, scene_time, for_render)
 
