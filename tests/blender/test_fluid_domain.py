@@ -199,6 +199,12 @@ def test_render_of_the_hidden_domain_surfaces_the_cache_and_fails_outside_the_ba
     status, output, written, _ = render_saved_copy("STOP", last + 1)
     check(status == 1 and written == [], f"exit status {status}, images {written}:\n{output[-3000:]}")
     check(f"pp_{last + 1:04d}.uni" in output and "render stopped" in output, output[-3000:])
+    # Hold Last Good Frame: the nearest earlier frame of the bake.
+    status, output, written, reports = render_saved_copy("HOLD", last + 1)
+    check(status == 0 and written == [f"frame_{last + 1:04d}.png"], f"exit status {status}, images {written}:\n"
+          f"{output[-3000:]}")
+    check(len(reports) == 1 and reports[0].startswith(f"Holding pp_{last:04d}.uni") and
+          int(reports[0].rsplit(" ", 1)[1]) > 1000, reports)
 
 
 def test_an_emitter_without_live_particles_is_not_its_mesh():

@@ -79,6 +79,23 @@ def particle_file(obj, scene_frame):
     return path
 
 
+def baked_scene_frames(obj):
+    """The scene frames whose particle file is on disk (what HOLD can fall back on), from one folder listing."""
+    settings = domain_settings(obj)
+    pattern = _PARTICLE_FILES.get(settings.cache_data_format)
+    folder = os.path.join(cache_folder(obj), "data")
+    if pattern is None or not os.path.isdir(folder):
+        return []
+    prefix, suffix = pattern.split("{", 1)[0], pattern.rsplit("}", 1)[1]
+    offset = cache_frame(obj, 0) * -1  # the scene frame of cache frame 0
+    frames = []
+    for name in os.listdir(folder):
+        number = name[len(prefix):len(name) - len(suffix)]
+        if name.startswith(prefix) and name.endswith(suffix) and number.lstrip("-").isdigit():
+            frames.append(int(number) + offset)
+    return sorted(frames)
+
+
 def read_particles(obj, scene_frame, api):
     """(positions (N, 3) float32 in world space, attributes, what was read, the reader's Particles) of the frame."""
     path = particle_file(obj, scene_frame)

@@ -489,7 +489,7 @@ def update_surface(obj, scene, force=False, depsgraph=None):
         _memory.last_error[pointer] = message
         status = message if expected else f"Error: {message}"
         if for_render:
-            status = _apply_render_policy(obj, settings, mesh, scene_time, frame, render_policy.failure_message(
+            status = _apply_render_policy(obj, settings, mesh, scene, scene_time, frame, render_policy.failure_message(
                 name, frame, source, message))
         else:
             mesh_update.clear_surface(mesh)
@@ -505,12 +505,12 @@ def update_surface(obj, scene, force=False, depsgraph=None):
         return True
 
 
-def _apply_render_policy(obj, settings, mesh, scene_time, frame, message):
+def _apply_render_policy(obj, settings, mesh, scene, scene_time, frame, message):
     """In a final render, what a frame that cannot be built shows (see render_policy); returns the status text.
     STOP does not return in a render without a UI."""
     policy = settings.render_failure
     if policy == render_policy.HOLD:
-        held = _hold_earlier_frame(obj, settings, mesh, scene_time)
+        held = _hold_earlier_frame(obj, settings, mesh, scene, scene_time)
         if held is not None:
             print(f"{message}\nMeniscus: holding {held[0]} instead")
             return _status_lines(f"Holding {held[0]} (this frame failed)", held[1])
@@ -523,10 +523,10 @@ def _apply_render_policy(obj, settings, mesh, scene_time, frame, message):
     return message
 
 
-def _hold_earlier_frame(obj, settings, mesh, scene_time):
+def _hold_earlier_frame(obj, settings, mesh, scene, scene_time):
     """Builds the nearest earlier file frame that builds; returns (its file name, status) or None."""
-    if settings.source_type == "OBJECT" and not settings.use_cache:  # a live object has no earlier frames
-        return None
+    if settings.source_type == "OBJECT" and not settings.use_cache:
+        return _hold_earlier_domain_frame(obj, settings, mesh, scene, scene_time)
     try:
         pattern = resolve_cache_pattern(obj) if settings.use_cache else resolve_pattern(obj)
         frames = _memory.sequences.frames(pattern)
@@ -545,6 +545,24 @@ def _hold_earlier_frame(obj, settings, mesh, scene_time):
             return os.path.basename(path), _build_file(mesh, settings, path, arguments, wanted, True)
         except Exception as error:
             print(f"Meniscus: cannot hold {path} either: {error}")
+    return None
+
+
+def _hold_earlier_domain_frame(obj, settings, mesh, scene, scene_time):
+    """A fluid domain's nearest earlier baked frame that builds; a live object has no earlier frames (None)."""
+    source = settings.source_object
+    if not fluid_domain.is_liquid_domain(source):
+        return None
+    try:
+        baked = fluid_domain.baked_scene_frames(source)
+    except Exception:  # the cache folder is unusable: nothing to hold
+        return None
+    for scene_frame in render_policy.earlier_frames(baked, int(round(scene_time))):
+        try:
+            _, work, _ = _object_source(obj, settings, mesh, scene, None, scene_frame, for_render=True)
+            return os.path.basename(fluid_domain.particle_file(source, scene_frame)), work()
+        except Exception as error:
+            print(f"Meniscus: cannot hold frame {scene_frame} of '{source.name}' either: {error}")
     return None
 
 
