@@ -165,6 +165,16 @@ def test_the_fluid_domain_for_the_narrow_band_fill():
     modifier.domain_settings.use_collision_border_top = False
     depsgraph = bpy.context.evaluated_depsgraph_get()
     built = fluid_domain.fluid_domain(open_top, scene, depsgraph, placement={"resolution": [32, 32, 24]})
+    # Without gravity the fill has no down: said in the panel's terms, not the core's.
+    scene.use_gravity = False
+    modifier.domain_settings.gravity = (0.0, 0.0, 0.0)
+    try:
+        fluid_domain.fluid_domain(open_top, scene, depsgraph)
+        check(False, "zero gravity was accepted")
+    except fluid_domain.DomainError as error:
+        check("has no gravity" in str(error) and "domain's Gravity" in str(error), str(error))
+    finally:
+        scene.use_gravity = True
     bpy.data.objects.remove(open_top, do_unlink=True)
     check(built["resolution"] == [32, 32, 24], "the reader's placement was dropped")
     check(built["closed_borders"] == [True] * 5 + [False], built["closed_borders"])

@@ -107,12 +107,17 @@ def read_particles(obj, scene_frame, api):
     return positions, dict(particles.attributes), f"fluid cache {os.path.basename(path)}", particles
 
 
-def gravity_direction(scene, settings):
+def gravity_direction(obj, scene):
     """World direction gravity pulls the liquid: the scene's gravity when it is on (as Mantaflow takes it), else
-    the domain's own."""
+    the domain's own. The narrow-band fill needs a down direction: none is an error in the artist's terms."""
+    settings = domain_settings(obj)
     vector = np.array(scene.gravity if scene.use_gravity else settings.gravity, dtype=np.float64)
     length = np.linalg.norm(vector)
-    return [0.0, 0.0, 0.0] if length == 0 else list(vector / length)
+    if not length > 0:
+        where = "Scene Properties > Gravity" if scene.use_gravity else "the domain's Gravity (scene gravity is off)"
+        raise DomainError(f"'{obj.name}' has no gravity ({where}): filling the liquid under its band of particles "
+                          "needs to know which way is down")
+    return list(vector / length)
 
 
 def _is_collision_effector(obj):
@@ -158,7 +163,7 @@ def fluid_domain(obj, scene, depsgraph=None, placement=None):
     domain = dict(placement or {})
     domain.update(
         closed_borders=[bool(getattr(settings, f"use_collision_border_{side}")) for side in _BORDERS],
-        gravity=gravity_direction(scene, settings),
+        gravity=gravity_direction(obj, scene),
         band_width_cells=float(settings.particle_band_width),
         obstacles=obstacle_triangles(obj, scene, depsgraph),
     )
