@@ -206,7 +206,8 @@ IndexToWorld VdbReader::read_transform() {
 // grid's compression flags.
 void VdbReader::read_data(unsigned char* out, std::size_t bytes, const std::string& what) {
     if (!(compression_ & (kCompressBlosc | kCompressZip))) {
-        std::memcpy(out, c_.take(bytes, what), bytes);
+        const unsigned char* in = c_.take(bytes, what);
+        if (bytes) std::memcpy(out, in, bytes);  // out may be null for no values
         return;
     }
     const std::size_t at = c_.pos();
@@ -215,7 +216,8 @@ void VdbReader::read_data(unsigned char* out, std::size_t bytes, const std::stri
         if (static_cast<std::uint64_t>(-size) != bytes)
             c_.fail(what + ": a stored block of " + std::to_string(-size) + " bytes at " + c_.where(at) + " where " +
                     std::to_string(bytes) + " are expected");
-        std::memcpy(out, c_.take(bytes, what), bytes);
+        const unsigned char* in = c_.take(bytes, what);
+        if (bytes) std::memcpy(out, in, bytes);
         return;
     }
     const unsigned char* in = c_.take(static_cast<std::uint64_t>(size), what);
