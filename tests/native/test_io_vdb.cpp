@@ -42,7 +42,7 @@ std::string blosc_outcome(const Bytes& frame, std::size_t expected, Bytes* out =
 
 }  // namespace
 
-TEST_CASE("Blosc frames: BloscLZ, LZ4, byte shuffle, stored; damage refused", "[io][vdb]") {
+TEST_CASE("Blosc frames: BloscLZ, LZ4, byte shuffle and stored frames decode, damage is refused", "[io][vdb]") {
     Bytes out;
     // BloscLZ: 3 literals "abc", then a match of 5 at distance 3 (ctrl 0x60, distance byte 2).
     CHECK(blosc_outcome(blosc_frame(0x10, 1, 8, {0x02, 'a', 'b', 'c', 0x60, 0x02}), 8, &out) == "");
