@@ -63,6 +63,20 @@ def reduced_bgeo(path, count):
     return bytes(header) + data[pos:pos + 4 * words * count] + data[pos + 4 * words * n_points:]
 
 
+def mantaflow_uni(magic, count, element_bytes, payload, grid=(16, 16, 8)):
+    """A Mantaflow UNI particle file (PB02 system or PD01 data): the 292-byte header, then the elements."""
+    header = magic + struct.pack("<6i", count, *grid, 0 if element_bytes == 16 else 1, element_bytes)
+    return header + b"mantaflow seed".ljust(256, b"\0") + bytes(8) + payload
+
+
+def mantaflow_config(resolution=(16, 16, 8)):
+    """config_####.uni as Blender writes it (204 bytes): a 2 x 2 x 1 m domain turned about z, moved to (3, 4, 5)."""
+    return (struct.pack("<4i", 16, *resolution) + struct.pack("<2f", 1 / 16, 0.104) +
+            struct.pack("<9f", -1, -1, -1, 1, 1, 1, -1, -1, -1) + struct.pack("<3i", 0, 0, 0) + struct.pack("<3f", 0, 0, 0) +
+            struct.pack("<16f", 0, 1, 0, 0, -1, 0, 0, 0, 0, 0, 0.5, 0, 3, 4, 5, 1) + struct.pack("<9i", 16, 16, 8, 0, 0, 0, 16, 16, 8) +
+            struct.pack("<3f", 0, 0, 0) + struct.pack("<f", 1.0) + b"C01\0")
+
+
 def write(harness, name, data):
     folder = CORPUS / harness
     folder.mkdir(parents=True, exist_ok=True)
@@ -153,6 +167,33 @@ def main():
           b"# vtk DataFile Version 5.1\nquad\nASCII\nDATASET POLYDATA\nPOINTS 4 float\n0 0 0 1 0 0 1 1 0 0 1 0\n"
           b"POLYGONS 2 4\nOFFSETS vtktypeint64\n0 4\nCONNECTIVITY vtktypeint64\n0 1 2 3\n"
           b"POINT_DATA 4\nNORMALS n float\n0 0 1 0 0 1 0 0 1 0 0 1\n")
+
+    # Mantaflow (Blender's fluid cache): a particle system (12 particles, two flagged), its velocities, a config and a
+    # bobj tetrahedron; the harness gives every input to each of the four parsers.
+    grid_positions = (p - p.min(axis=0)) / np.ptp(p, axis=0).max() * 7.5 + 0.25
+    flags = np.zeros(n, "<i4")
+    flags[3], flags[7] = 1, 1 << 10
+    system = np.empty(n, [("p", "<f4", (3,)), ("flag", "<i4")])
+    system["p"], system["flag"] = grid_positions, flags
+    write("mantaflow", "pp_0001.uni", mantaflow_uni(b"PB02", n, 16, system.tobytes()))
+    write("mantaflow", "pVel_0001.uni", mantaflow_uni(b"PD01", n, 12, v.astype("<f4").tobytes()))
+    write("mantaflow", "config_0001.uni", mantaflow_config())
+    tetrahedron = np.array([[0, 0, 0], [0.25, 0, 0], [0, 0.25, 0], [0, 0, 0.2]], "<f4")
+    write("mantaflow", "fluid_mesh_0001.bobj",
+          struct.pack("<i", 4) + tetrahedron.tobytes() + struct.pack("<i", 4) + tetrahedron.tobytes() +
+          struct.pack("<i", 4) + np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], "<i4").tobytes())
+
+    # OpenVDB points: Blender 3.4's Mantaflow bake of the test data (a velocity grid and a point grid in LZ4 Blosc).
+    write("vdb", "mantaflow_pool.vdb", (ROOT / "tests/data/mantaflow/cache/data/fluid_data_0001.vdb").read_bytes())
+    write("particles", "vdb_mantaflow_pool.vdb", (CORPUS / "vdb" / "mantaflow_pool.vdb").read_bytes())  # by its magic
+    # Blosc frames (one block each): BloscLZ with a match, LZ4 with a match, LZ4 byte-shuffled, stored.
+    def blosc(flags, typesize, nbytes, stream):
+        return (bytes([2, 1, flags, typesize]) + struct.pack("<5I", nbytes, nbytes, 24 + len(stream), 20, len(stream)) +
+                bytes(stream))
+    write("blosc", "blosclz.blosc", blosc(0x10, 1, 8, [0x02, 97, 98, 99, 0x60, 0x02]))
+    write("blosc", "lz4.blosc", blosc(0x30, 1, 10, [0x31, 97, 98, 99, 3, 0, 0x20, 88, 89]))
+    write("blosc", "lz4_shuffle.blosc", blosc(0x31, 4, 8, [0x80, 4, 8, 3, 7, 2, 6, 1, 5]))
+    write("blosc", "stored.blosc", bytes([2, 1, 2, 1]) + struct.pack("<3I", 3, 3, 19) + b"xyz")
 
     total = sum(f.stat().st_size for f in CORPUS.rglob("*") if f.is_file())
     print(f"corpus: {sum(1 for f in CORPUS.rglob('*') if f.is_file())} seeds, {total / 1e3:.0f} kB")

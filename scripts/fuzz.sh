@@ -6,8 +6,9 @@
 #   scripts/fuzz.sh [SECONDS_PER_HARNESS (default 60)] [HARNESS ...]
 #   e.g. scripts/fuzz.sh 120 vtu npz     # only fuzz_read_vtu and fuzz_read_npz, 2 minutes each
 #
-# Harnesses: vtk bgeo vtu ply npy npz csv xyz houdini (one reader each), particles (read_particles: gzip, detection, all
-# readers), mesh (read_mesh: PLY and OBJ). New inputs go to build-fuzz/work/<harness>/, never into the seed corpus.
+# Harnesses: vtk bgeo vtu ply npy npz csv xyz houdini vdb (one reader each), particles (read_particles: gzip, detection, all
+# readers), mesh (read_mesh: PLY and OBJ), mantaflow (the Mantaflow cache parsers), blosc (the Blosc decoder). New
+# inputs go to build-fuzz/work/<harness>/, never into the seed corpus.
 # Runs one harness at a time on one core (FUZZ_JOBS=2 runs two at once). Needs clang and its runtime:
 # apt-get install clang libclang-rt-14-dev (done here when missing and we are root).
 set -euo pipefail
@@ -15,7 +16,7 @@ cd "$(dirname "$0")/.."
 
 seconds=${1:-60}
 shift || true
-all=(vtk bgeo vtu ply npy npz csv xyz houdini particles mesh)
+all=(vtk bgeo vtu ply npy npz csv xyz houdini particles mesh mantaflow vdb blosc)
 harnesses=("$@")
 [ ${#harnesses[@]} -eq 0 ] && harnesses=("${all[@]}")
 jobs=${FUZZ_JOBS:-1}
@@ -40,7 +41,7 @@ flags=(-std=c++17 -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined -f
 
 # The readers, built once with coverage instrumentation (rebuilt when a source or header is newer).
 objects=()
-for src in $(find native/core/io -name '*.cpp' | sort) native/core/base/platform.cpp native/core/base/decimal.cpp; do
+for src in $(find native/core/io -name '*.cpp' | sort) native/core/base/platform.cpp native/core/base/decimal.cpp native/core/mesh/mesh.cpp; do
   obj="$out/obj/$(echo "${src#native/core/}" | tr / _ | sed 's/\.cpp$//').o"
   if [ ! -f "$obj" ] || [ "$src" -nt "$obj" ] || [ -n "$(find native/core/io native/core/base -name '*.h' -newer "$obj")" ]; then
     echo "fuzz: compiling $src"
@@ -62,7 +63,7 @@ done
 # zlib-based paths (and Houdini constant pages) may expand up to max_inflated_size (64x + 64 MiB), so they get more room.
 malloc_limit() {
   case "$1" in
-    vtu|npz|houdini|particles|mesh) echo 160 ;;
+    vtu|npz|houdini|particles|mesh|vdb) echo 160 ;;
     *) echo 16 ;;
   esac
 }

@@ -16,7 +16,7 @@ started=$SECONDS
 for job in pool:UNI open_top:UNI moving_obstacle:UNI splash:UNI pool:OPENVDB; do
   scene="${job%%:*}" format="${job##*:}"
   dir="$out_root/${scene}_${format}"
-  if [[ -f "$dir/scene.json" && "$dir/scene.json" -nt tests/mantaflow/bake_scene.py && "$dir/scene.json" -nt "$0" ]]; then
+  if [[ -f "$dir/scene.json" && "$dir/scene.json" -nt tests/mantaflow/bake_scene.py && "$dir/scene.json" -nt tests/mantaflow/bake.sh ]]; then
     continue
   fi
   rm -rf "$dir"  # a half-written or outdated bake must not mix its frames with the new ones

@@ -184,6 +184,10 @@ TEST_CASE("Mantaflow files that cannot be placed or read are refused with the fi
     Bytes flat = config(0.0f);
     cache.write(cache.config_dir, "config_0003.uni", flat);
     require_particle_error(pp, "zero scale on axis 2");
+    Bytes far = config();  // the fuzzer's finding: res_min near INT_MIN overflowed res_max - res_min
+    for (int k = 0; k < 4; ++k) far[160 + k] = static_cast<unsigned char>(static_cast<std::uint32_t>(-2147483587) >> (8 * k));
+    cache.write(cache.config_dir, "config_0003.uni", far);
+    require_particle_error(pp, "is not a domain's grid");
     cache.write(cache.config_dir, "config_0003.uni", config(0.5f, {16, 16, 9}));
     require_particle_error(pp, "grid but the cache's config of that frame says 16 x 16 x 9");
     cache.write(cache.config_dir, "config_0003.uni", config());

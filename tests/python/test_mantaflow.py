@@ -3,6 +3,7 @@ land inside Mantaflow's own surface, their velocities are in m/s, the bobj mesh 
 reconstructs a pp_{}.uni sequence."""
 import json
 import os
+import pathlib
 import subprocess
 
 import numpy as np
@@ -97,3 +98,48 @@ def test_the_vel_grid_and_a_cache_without_config_are_refused_by_name(baked, tmp_
     (lone / "pp_0005.uni").write_bytes((data / "pp_0005.uni").read_bytes())
     with pytest.raises(meniscus.FormatError, match="config_0005.uni, which does not exist"):
         meniscus.read_particles(lone / "pp_0005.uni")
+
+
+@pytest.mark.parametrize("name", ["pp_0005.uni", "pp_{}.uni", "pp_####.uni"])
+def test_frame_patterns_list_the_particle_files_only(baked, name):
+    from meniscus import sequence
+    frames = sequence.parse_pattern(str(baked / "pool_UNI/cache/data" / name)).list_frames()
+    assert sorted(frames) == list(range(1, 25))
+    assert all(pathlib.Path(path).name == f"pp_{frame:04d}.uni" for frame, path in frames.items())
+
+
+@pytest.mark.parametrize("frame", [1, 10, 24])
+def test_openvdb_points_match_the_uni_particles_of_the_same_simulation(baked, frame):
+    # The same scene baked with data format OpenVDB: Mantaflow writes the same particles as a point data grid
+    # (half-float voxel offsets, Blosc LZ4 pages) beside a velocity grid; placed and converted like the UNI cache.
+    vdb = meniscus.read_particles(baked / f"pool_OPENVDB/cache/data/fluid_data_{frame:04d}.vdb")
+    uni = meniscus.read_particles(baked / f"pool_UNI/cache/data/pp_{frame:04d}.uni")
+    assert len(vdb) == len(uni) > 10000
+    match, gap = nearest(uni.positions, vdb.positions)
+    assert np.percentile(gap, 99) < 2e-5  # half floats of a voxel offset: 0.0625 m * 2^-11
+    assert len(np.unique(match)) > 0.99 * len(vdb)
+    assert set(vdb.attributes) == {"velocity"}
+    speed_gap = np.abs(vdb.attributes["velocity"] - uni.attributes["velocity"][match]).max(axis=1)
+    assert np.percentile(speed_gap, 99) < 2e-3
+
+
+def nearest(points, queries, candidates=32):
+    """Index of and distance to the nearest of `points` for each query, among the neighbours in x order."""
+    order = np.argsort(points[:, 0], kind="stable")
+    start = np.clip(np.searchsorted(points[order, 0], queries[:, 0] - 1e-4) - 2, 0, max(len(points) - candidates, 0))
+    window = order[start[:, None] + np.arange(min(candidates, len(points)))]
+    distance = np.linalg.norm(points[window] - queries[:, None, :], axis=2)
+    best = distance.argmin(axis=1)
+    return window[np.arange(len(queries)), best], distance[np.arange(len(queries)), best]
+
+
+def test_cli_reconstructs_an_openvdb_sequence(baked, cli, tmp_path):
+    result = subprocess.run([cli, "reconstruct", str(baked / "pool_OPENVDB/cache/data/fluid_data_{}.vdb"), "-o",
+                             str(tmp_path / "pool_{}.ply"), "-r", "0.03", "-c", "0.5", "-s", "12", "-e", "12"],
+                            capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stderr
+    mesh = meniscus.read_mesh(tmp_path / "pool_0012.ply")
+    assert mesh.vertices[:, 2].min() > -0.1 and np.abs(mesh.vertices[:, :2]).max() < 1.1
+    from meniscus import sequence
+    frames = sequence.parse_pattern(str(baked / "pool_OPENVDB/cache/data/fluid_data_0003.vdb")).list_frames()
+    assert sorted(frames) == list(range(1, 25))

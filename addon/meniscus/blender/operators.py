@@ -9,7 +9,7 @@ from .. import sequence
 from . import app_handlers, fluid_domain, material, properties, surfaces, update
 
 # The formats the core reads (each also gzip-compressed), for the file browser's filter.
-PARTICLE_FILE_GLOB = "*.vtk;*.vtu;*.vtp;*.bgeo;*.bhclassic;*.ply;*.npy;*.npz;*.csv;*.xyz;*.gz"
+PARTICLE_FILE_GLOB = "*.vtk;*.vtu;*.vtp;*.bgeo;*.bhclassic;*.ply;*.npy;*.npz;*.csv;*.xyz;*.gz;*.uni;*.vdb"
 
 
 def add_surface_object(context, name, configure):

@@ -61,7 +61,7 @@ bool ends_with(std::string_view s, std::string_view suffix) {
     return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-enum class ParticleFormat { unknown, vtk, bgeo, houdini_json, vtu, ply, npy, npz, csv, xyz, mantaflow_uni };
+enum class ParticleFormat { unknown, vtk, bgeo, houdini_json, vtu, ply, npy, npz, csv, xyz, mantaflow_uni, vdb };
 
 // Houdini's ASCII JSON geometry: a JSON array whose first keys (within the first KiB) include "fileversion" or
 // "pointcount".
@@ -120,6 +120,7 @@ ParticleFormat detect_particle_format(const Bytes& b) {
     if (starts_with(b, "ply\n") || starts_with(b, "ply\r")) return ParticleFormat::ply;
     // Mantaflow (Blender's fluid cache) particle systems; the PB01 and PD01 files go there to be named in its error.
     if (starts_with(b, "PB02") || starts_with(b, "PB01")) return ParticleFormat::mantaflow_uni;
+    if (starts_with(b, " BDV")) return ParticleFormat::vdb;  // OpenVDB (point data grids)
     if (starts_with(b, "\x93NUMPY")) return ParticleFormat::npy;
     if (starts_with(b, "PK\x03\x04") || starts_with(b, "PK\x05\x06")) return ParticleFormat::npz;
     if (looks_like_xml(b)) return ParticleFormat::vtu;
@@ -169,8 +170,9 @@ ParticleData read_particles_from_bytes(const std::string& path, Bytes bytes) {
             format = ParticleFormat::xyz;
         else
             fail(path, "unknown particle file format: the content is none of legacy VTK ('# vtk DataFile'), VTK XML "
-                       "('<VTKFile'), BGEO ('BgeoV' or Houdini JSON geometry), PLY ('ply'), NumPy ('\\x93NUMPY' or a zip), Mantaflow UNI ('PB02'), or CSV with "
-                       "an x,y,z header, plain or gzip-compressed; raw float32 XYZ files need the extension .xyz");
+                       "('<VTKFile'), BGEO ('BgeoV' or Houdini JSON geometry), PLY ('ply'), NumPy ('\\x93NUMPY' or a zip), "
+                       "Mantaflow UNI ('PB02'), OpenVDB (' BDV'), or CSV with an x,y,z header, plain or gzip-compressed; "
+                       "raw float32 XYZ files need the extension .xyz");
     }
     Source source{path, bytes.data(), bytes.size(), decompressed};
     switch (format) {
@@ -184,6 +186,7 @@ ParticleData read_particles_from_bytes(const std::string& path, Bytes bytes) {
         case ParticleFormat::csv: return read_csv_particles(source);
         case ParticleFormat::xyz: return read_xyz_particles(source);
         case ParticleFormat::mantaflow_uni: return read_mantaflow_uni_particles(source);
+        case ParticleFormat::vdb: return read_vdb_particles(source);
         case ParticleFormat::unknown: break;
     }
     fail(path, "unknown particle file format");

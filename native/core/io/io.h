@@ -16,7 +16,8 @@ namespace meniscus {
 // and binary vertex properties), raw float32 or text .xyz, NumPy .npy / .npz, CSV with an x, y, z header; any of
 // them gzip-compressed; Mantaflow's UNI particle systems (Blender's fluid cache data/pp_####.uni: placed in the world
 // by the cache's config/config_####.uni, with the sibling pVel_####.uni as `velocity` in m/s, and
-// ParticleData::fluid_domain set). Not supported, with a message naming the variant: Houdini .sc (Blosc), classic ASCII
+// ParticleData::fluid_domain set); OpenVDB point data grids (.vdb: Houdini, Blender's Mantaflow data cache, read
+// without the OpenVDB library; Mantaflow's placed like its UNI files). Not supported, with a message naming the variant: Houdini .sc (Blosc), classic ASCII
 // PGEOMETRY, parallel .pvtu, non-zlib VTK compressors, pickled .npy.
 // Attributes become float32 arrays (ints converted), named as in the file. Legacy VTK "long" is read as 8 bytes (as
 // VTK writes it on 64-bit Unix). Decompression (gzip, VTK zlib blocks, .npz members) is capped at 64x the compressed

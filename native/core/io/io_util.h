@@ -63,6 +63,7 @@ ParticleData read_npz_particles(const Source& source);    // NumPy .npz: a zip o
 ParticleData read_csv_particles(const Source& source);    // delimited text with a header naming x, y, z
 ParticleData read_xyz_particles(const Source& source);    // raw little-endian float32 triples, or x y z text lines
 ParticleData read_houdini_json_particles(const Source& source);  // Houdini 12+ JSON geometry: ASCII .geo, binary .bgeo
+ParticleData read_vdb_points(const Source& source);  // OpenVDB point data grids (formats/vdb_points.cpp)
 
 // The mesh readers (formats/ply.cpp, obj.cpp, vtk.cpp), the same way.
 TriMesh read_ply_mesh(const Source& source);

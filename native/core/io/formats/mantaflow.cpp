@@ -23,7 +23,6 @@ constexpr std::int32_t kParticleInvalid = 1 << 30;
 // 0.1 * 25 = 2.5 time units (frameLengthRaw), whatever the frame rate.
 constexpr double kMantaflowTimeUnitsPerSecond = 2.5;
 
-constexpr std::size_t kUniHeaderBytes = 4 + 6 * 4 + 256 + 8;  // magic, 6 ints, info string, timestamp
 constexpr std::size_t kConfigBytes = 204;
 constexpr int kMaxGridCells = 1 << 16;  // per axis; far beyond any domain Blender can bake
 
@@ -73,7 +72,7 @@ std::string grid_text(const std::array<int, 3>& g) {
 // "<dir>/pp_0012.uni" -> {"pp_", "0012"}: the name before the frame number and the number's digits.
 bool split_frame_name(const std::filesystem::path& file, std::string& prefix, std::string& digits) {
     std::string stem = path_to_utf8(file.filename());
-    for (const char* ext : {".gz", ".bobj", ".uni"}) {
+    for (const char* ext : {".gz", ".bobj", ".uni", ".vdb"}) {
         const std::string e = ext;
         if (stem.size() > e.size() && to_lower(stem.substr(stem.size() - e.size())) == e) stem.resize(stem.size() - e.size());
     }
@@ -128,6 +127,14 @@ FluidDomain domain_for(const std::string& path, const char* what, MantaflowConfi
 std::array<double, 3> world_of_grid(const FluidDomain& d, double i, double j, double k) {
     std::array<double, 3> w;
     for (int c = 0; c < 3; ++c) w[c] = d.origin[c] + i * d.axes[0][c] + j * d.axes[1][c] + k * d.axes[2][c];
+    return w;
+}
+
+// Grid cells per Mantaflow time unit -> m/s in the world, along the domain's axes.
+std::array<float, 3> world_velocity(const FluidDomain& d, const float* v) {
+    std::array<float, 3> w;
+    for (int k = 0; k < 3; ++k)
+        w[k] = static_cast<float>(kMantaflowTimeUnitsPerSecond * (v[0] * d.axes[0][k] + v[1] * d.axes[1][k] + v[2] * d.axes[2][k]));
     return w;
 }
 
@@ -193,8 +200,8 @@ MantaflowConfig parse_mantaflow_config(const Source& source) {
     for (int k = 0; k < 3; ++k) m.res_max[k] = le_i32(c, "the maximum resolution");
     for (int k = 0; k < 3; ++k) {
         if (m.resolution[k] <= 0 || m.resolution[k] > kMaxGridCells || m.base_resolution[k] <= 0 ||
-            m.base_resolution[k] > kMaxGridCells || m.res_max[k] - m.res_min[k] <= 0 || m.res_max[k] > kMaxGridCells ||
-            m.res_min[k] < -kMaxGridCells)
+            m.base_resolution[k] > kMaxGridCells || m.res_min[k] < -kMaxGridCells || m.res_max[k] > kMaxGridCells ||
+            m.res_max[k] <= m.res_min[k])
             c.fail("resolution " + grid_text(m.resolution) + " (base " + grid_text(m.base_resolution) + ", from " +
                    grid_text(m.res_min) + " to " + grid_text(m.res_max) + ") at " + c.where(4) + " is not a domain's grid");
         if (!(m.p1[k] > m.p0[k]) || !std::isfinite(m.p0[k]) || !std::isfinite(m.p1[k]))
@@ -298,15 +305,36 @@ ParticleData read_mantaflow_uni_particles(const Source& source) {
         const float* g = &system.positions[3 * i];
         const auto w = world_of_grid(domain, g[0], g[1], g[2]);
         for (int k = 0; k < 3; ++k) out.positions.push_back(static_cast<float>(w[k]));
-        if (!velocity.empty()) {
-            const float* v = &velocity[3 * i];
-            for (int k = 0; k < 3; ++k)
-                out.attributes[0].values.push_back(static_cast<float>(
-                    kMantaflowTimeUnitsPerSecond * (v[0] * domain.axes[0][k] + v[1] * domain.axes[1][k] + v[2] * domain.axes[2][k])));
-        }
+        if (!velocity.empty())
+            for (float v : world_velocity(domain, &velocity[3 * i])) out.attributes[0].values.push_back(v);
     }
     out.fluid_domain = domain;
     return out;
+}
+
+ParticleData read_vdb_particles(const Source& source) {
+    ParticleData p = read_vdb_points(source);
+    std::string prefix, digits;
+    if (!split_frame_name(path_from_utf8(source.path), prefix, digits) || prefix != "fluid_data_") return p;
+    // Blender's OpenVDB data cache: the points are in grid cells times the cell size; the config places them.
+    const FluidDomain domain = domain_for(source.path, "Mantaflow's OpenVDB particle positions");
+    const auto& a = domain.axes;
+    const double cell = std::sqrt(a[0][0] * a[0][0] + a[0][1] * a[0][1] + a[0][2] * a[0][2]);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        float* x = &p.positions[3 * i];
+        const auto w = world_of_grid(domain, x[0] / cell, x[1] / cell, x[2] / cell);
+        for (int k = 0; k < 3; ++k) x[k] = static_cast<float>(w[k]);
+    }
+    for (Attribute& attribute : p.attributes)
+        if (attribute.name == "particles_velocity" && attribute.components == 3) {
+            attribute.name = "velocity";
+            for (std::size_t i = 0; i < p.size(); ++i) {
+                const auto w = world_velocity(domain, &attribute.values[3 * i]);
+                std::copy(w.begin(), w.end(), attribute.values.begin() + 3 * i);
+            }
+        }
+    p.fluid_domain = domain;
+    return p;
 }
 
 TriMesh read_mantaflow_bobj_mesh(const Source& source) {

@@ -49,6 +49,10 @@ TriMesh parse_mantaflow_bobj(const Source& source);
 // config (required: without it the grid has no place in the world). The particle reader adds the sibling
 // pVel_####.uni as `velocity` in m/s when it exists.
 ParticleData read_mantaflow_uni_particles(const Source& source);
+// OpenVDB points (read_vdb_points); a Mantaflow data cache file (data/fluid_data_####.vdb) is placed in the world
+// by its config like the UNI particles, its particles_velocity becoming `velocity` in m/s. Other files (Houdini)
+// keep the VDB's world space and attribute names.
+ParticleData read_vdb_particles(const Source& source);
 TriMesh read_mantaflow_bobj_mesh(const Source& source);
 
 }  // namespace io_detail
