@@ -26,7 +26,8 @@ from _support import check, mesh_counts  # noqa: E402
 
 BUILD = pathlib.Path(os.environ.get("MENISCUS_BUILD", _support.REPO / "build"))
 BAKE = BUILD / "mantaflow" / "pool_UNI"
-if not (BAKE / "scene.json").is_file():  # idempotent: keeps what is baked and up to date
+VDB_BAKE = BUILD / "mantaflow" / "pool_OPENVDB"  # the same scene with Blender's default data format
+if not (BAKE / "scene.json").is_file() or not (VDB_BAKE / "scene.json").is_file():  # keeps what is up to date
     subprocess.run(["bash", str(_support.REPO / "tests/mantaflow/bake.sh"), "/usr/bin/blender"], check=True,
                    env=dict(os.environ, MENISCUS_BUILD=str(BUILD)))
 SCENE = json.loads((BAKE / "scene.json").read_text())
@@ -68,8 +69,8 @@ def open_domain_scene():
     settings.domain_type = "LIQUID"
     settings.cache_data_format, settings.cache_type = "UNI", "ALL"  # as baked (new 4.x domains: OpenVDB, Replay)
     settings.resolution_max = SCENE["resolution_max"]
-    settings.cache_directory = "//cache"
     settings.cache_frame_start, settings.cache_frame_end = 1, SCENE["frames"]
+    settings.cache_directory = "//cache"  # last: editing cache settings makes Blender delete the folder's files
     return scene, domain
 
 
@@ -185,6 +186,38 @@ def test_the_fluid_domain_for_the_narrow_band_fill():
     corners = np.array(built["obstacles"][0]).reshape(-1, 3)
     check(np.allclose(corners.min(axis=0), [0.3, 0.1, 0.05], atol=1e-5) and
           np.allclose(corners.max(axis=0), [0.7, 0.5, 0.45], atol=1e-5), (corners.min(axis=0), corners.max(axis=0)))
+
+
+def test_openvdb_cache_is_read_from_its_fluid_data_files():
+    # Blender's default data format keeps the particles in data/fluid_data_####.vdb (a point data grid).
+    bpy.ops.mesh.primitive_cube_add(size=2, location=(0, 0, 0.75))
+    vdb_domain = bpy.context.active_object
+    vdb_domain.scale = (1, 1, 0.75)
+    modifier = vdb_domain.modifiers.new("Fluid", "FLUID")
+    modifier.show_viewport = modifier.show_render = False  # only the files are read: no Mantaflow run
+    modifier.fluid_type = "DOMAIN"
+    vdb_settings = modifier.domain_settings
+    vdb_settings.domain_type = "LIQUID"
+    vdb_settings.cache_data_format, vdb_settings.cache_type = "OPENVDB", "ALL"
+    vdb_settings.cache_frame_start, vdb_settings.cache_frame_end = 1, SCENE["frames"]
+    # A copy, named last: editing a domain's cache settings makes Blender delete the files of its cache folder.
+    copy = pathlib.Path(_temporary.name) / "pool_vdb_cache"
+    shutil.copytree(VDB_BAKE / "cache", copy)
+    vdb_settings.cache_directory = str(copy)
+    vdb_surface = None
+    try:
+        scene.frame_set(10)
+        check(bpy.ops.meniscus.add_object_surface(source_name=vdb_domain.name) == {"FINISHED"}, "add")
+        vdb_surface = bpy.context.view_layer.objects.active
+        status = vdb_surface.meniscus.status
+        expected = api.read_particles(copy / "data" / "fluid_data_0010.vdb")
+        check(not vdb_surface.meniscus.status_is_error and "fluid_data_0010.vdb" in status and
+              f"{len(expected):,} particles" in status, status)
+        check(mesh_counts(vdb_surface)[1] > 1000, mesh_counts(vdb_surface))
+    finally:
+        if vdb_surface is not None:
+            bpy.data.objects.remove(vdb_surface, do_unlink=True)
+        bpy.data.objects.remove(vdb_domain, do_unlink=True)
 
 
 def render_saved_copy(policy, first, last=None):
