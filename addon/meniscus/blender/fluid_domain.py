@@ -202,7 +202,10 @@ def derived_radius(obj):
 
 def describe(obj):
     """Lines for the panel: what the surface reads and what its defaults were derived from."""
-    radius, how = derived_radius(obj)
+    try:
+        radius, how = derived_radius(obj)
+    except DomainError as error:  # drawn on every redraw: a message, never an exception
+        return [str(error)]
     settings = domain_settings(obj)
     return [f"Particles from the cache: {cache_folder(obj)}",
             f"Radius {radius:.4g} m = {how}",
