@@ -185,6 +185,7 @@ def main():
 
     # OpenVDB points: Blender 3.4's Mantaflow bake of the test data (a velocity grid and a point grid in LZ4 Blosc).
     write("vdb", "mantaflow_pool.vdb", (ROOT / "tests/data/mantaflow/cache/data/fluid_data_0001.vdb").read_bytes())
+    write("particles", "vdb_mantaflow_pool.vdb", (CORPUS / "vdb" / "mantaflow_pool.vdb").read_bytes())  # by its magic
     # Blosc frames (one block each): BloscLZ with a match, LZ4 with a match, LZ4 byte-shuffled, stored.
     def blosc(flags, typesize, nbytes, stream):
         return (bytes([2, 1, flags, typesize]) + struct.pack("<5I", nbytes, nbytes, 24 + len(stream), 20, len(stream)) +

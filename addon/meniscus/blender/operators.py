@@ -6,7 +6,7 @@ from bpy.props import BoolProperty, FloatProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
 from .. import sequence
-from . import app_handlers, material, properties, surfaces, update
+from . import app_handlers, fluid_domain, material, properties, surfaces, update
 
 # The formats the core reads (each also gzip-compressed), for the file browser's filter.
 PARTICLE_FILE_GLOB = "*.vtk;*.vtu;*.vtp;*.bgeo;*.bhclassic;*.ply;*.npy;*.npz;*.csv;*.xyz;*.gz;*.uni;*.vdb"
@@ -196,11 +196,13 @@ class MENISCUS_OT_add_object_surface(bpy.types.Operator):
     bl_label = "Surface From Object"
     bl_options = {"REGISTER", "UNDO"}
 
+    DEFAULT_RADIUS = 0.025
     source_name: StringProperty(name="Source", description="Object to surface (default: the active object)")
     particle_radius: FloatProperty(
         name="Particle Radius",
-        description="Radius of one particle in scene units; the other lengths are multiples of it",
-        default=0.025, min=1e-6, soft_min=1e-4, soft_max=1.0, precision=4, step=0.1, subtype="DISTANCE", unit="LENGTH",
+        description="Radius of one particle in scene units; the other lengths are multiples of it (a liquid "
+                    "domain's default comes from its grid)",
+        default=DEFAULT_RADIUS, min=1e-6, soft_min=1e-4, soft_max=1.0, precision=4, step=0.1, subtype="DISTANCE", unit="LENGTH",
     )
 
     @classmethod
@@ -213,18 +215,58 @@ class MENISCUS_OT_add_object_surface(bpy.types.Operator):
         if source is None or source.type not in {"MESH", "POINTCLOUD"}:
             self.report({"ERROR"}, "Choose a mesh or point cloud object (particle systems live on meshes)")
             return {"CANCELLED"}
-        def configure(settings):
-            settings.source_type = "OBJECT"
-            settings.source_object = source
-            settings.particle_radius = self.particle_radius
-
-        obj = add_surface_object(context, f"{source.name} Surface", configure)
+        # A liquid domain's radius comes from its grid unless the caller gave one.
+        radius = self.particle_radius if self.properties.is_property_set("particle_radius") else None
+        obj = add_object_surface(context, source, radius)
         self.report({"INFO"}, f"Added '{obj.name}'")
         return {"FINISHED"}
 
 
+def add_object_surface(context, source, particle_radius=None):
+    """A surface around another object's particles; a liquid domain's defaults are derived from its grid."""
+    def configure(settings):
+        settings.source_type = "OBJECT"
+        settings.source_object = source
+        if fluid_domain.is_liquid_domain(source):
+            fluid_domain.configure_surface(settings, source)
+        if particle_radius is not None or not fluid_domain.is_liquid_domain(source):
+            settings.particle_radius = particle_radius or MENISCUS_OT_add_object_surface.DEFAULT_RADIUS
+
+    return add_surface_object(context, f"{source.name} Surface", configure)
+
+
+class MENISCUS_OT_add_fluid_domain_surface(bpy.types.Operator):
+    """Add a fluid surface around the liquid of a Mantaflow fluid domain (the active one, or the scene's only one),
+    read from its cache at each frame: radius and iso threshold derived from the domain's grid"""
+    bl_idname = "meniscus.add_fluid_domain_surface"
+    bl_label = "Surface From Fluid Domain"
+    bl_options = {"REGISTER", "UNDO"}
+
+    hide_domain_in_renders: BoolProperty(
+        name="Hide Domain in Renders",
+        description="Also hide the domain object (its box or Mantaflow's own mesh) from renders; the surface reads "
+                    "the cache, so it is unaffected",
+        default=False,
+    )
+
+    @classmethod
+    def poll(cls, context):
+        return fluid_domain.liquid_domain_for(context) is not None
+
+    def execute(self, context):
+        domain = fluid_domain.liquid_domain_for(context)
+        if domain is None:
+            self.report({"ERROR"}, "Select a liquid fluid domain (Physics > Fluid > Domain, type Liquid)")
+            return {"CANCELLED"}
+        obj = add_object_surface(context, domain)
+        if self.hide_domain_in_renders:
+            domain.hide_render = True
+        self.report({"INFO"}, f"Added '{obj.name}' from the fluid cache of '{domain.name}'")
+        return {"FINISHED"}
+
+
 classes = (MENISCUS_OT_add_sequence, MENISCUS_OT_reload, MENISCUS_OT_detect_frame_range,
-           MENISCUS_OT_add_object_surface)
+           MENISCUS_OT_add_object_surface, MENISCUS_OT_add_fluid_domain_surface)
 
 
 def menu_import(self, context):

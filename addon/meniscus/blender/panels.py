@@ -4,7 +4,7 @@ import textwrap
 import bpy
 
 from .. import parameters, sequence
-from . import bake, properties, surfaces, update
+from . import bake, fluid_domain, properties, surfaces, update
 
 
 def status_width(context):
@@ -60,6 +60,7 @@ class MENISCUS_PT_main(_SidebarPanel, bpy.types.Panel):
         column.operator("meniscus.add_sequence", text="Add Particle Sequence", icon="MOD_FLUIDSIM")
         column.operator("meniscus.add_cache", text="Add Mesh Cache", icon="FILE_CACHE")
         column.operator("meniscus.add_object_surface", icon="PARTICLES")
+        column.operator("meniscus.add_fluid_domain_surface", icon="MOD_FLUIDSIM")
         obj = context.active_object
         if not surfaces.is_surface(obj):
             layout.label(text="Select a surface to edit it")
@@ -97,6 +98,10 @@ class MENISCUS_PT_source(_SurfacePanel, bpy.types.Panel):
         layout.prop(settings, "source_type", expand=True)
         if settings.source_type == "OBJECT":
             layout.prop(settings, "source_object", text="Object")
+            if fluid_domain.is_liquid_domain(settings.source_object):
+                column = layout.column(align=True)
+                for line in fluid_domain.describe(settings.source_object):
+                    column.label(text=line)
             return
         layout.prop(settings, "file_pattern", text="Files")
 

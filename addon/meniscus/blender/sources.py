@@ -3,7 +3,10 @@
 What counts as particles, in order: the alive particles of the object's particle systems; else the points of a
 point cloud; else the vertices of its evaluated mesh (modifiers and geometry nodes applied, so a Geometry Nodes
 simulation that outputs points as vertices works too). Positions are in world space, like the surface object
-(which the add operator leaves at the origin).
+(which the add operator leaves at the origin). A Mantaflow liquid domain is read from its cache (fluid_domain).
+
+Never a wrong surface in silence: an object with particle systems is read from them even when none is alive now
+(not from its mesh), and a mesh with faces is refused: its vertices are the corners of a surface, not particles.
 """
 import hashlib
 
@@ -85,10 +88,13 @@ def _to_world_vectors(vectors, matrix):
 def object_particles(source, depsgraph=None, wanted=()):
     """(positions (N, 3) float32 in world space, attributes by name, a word for what was read)."""
     evaluated = _evaluated(source, depsgraph)
-    from_systems = _particle_systems(evaluated) if len(evaluated.particle_systems) else None
-    if from_systems is not None:
+    if len(evaluated.particle_systems):
+        from_systems = _particle_systems(evaluated)
+        kind = f"{len(source.particle_systems)} particle system(s)"
+        if from_systems is None:  # none born yet or all dead: the emitter's own mesh is not the fluid
+            return np.empty((0, 3), dtype=np.float32), {}, kind
         positions, attributes = from_systems
-        return np.ascontiguousarray(positions), attributes, f"{len(source.particle_systems)} particle system(s)"
+        return np.ascontiguousarray(positions), attributes, kind
 
     data = evaluated.data
     matrix = evaluated.matrix_world
@@ -98,6 +104,10 @@ def object_particles(source, depsgraph=None, wanted=()):
         data.attributes["position"].data.foreach_get("vector", flat)
         kind = "point cloud"
     elif source.type == "MESH":
+        if len(data.polygons):
+            raise ValueError(f"'{source.name}' is a mesh with {len(data.polygons):,} faces: its {len(data.vertices):,} "
+                             "vertices are the corners of a surface, not particles. Surface a particle system, a "
+                             "point cloud or a mesh of loose vertices")
         count = len(data.vertices)
         flat = np.empty(count * 3, dtype=np.float32)
         data.vertices.foreach_get("co", flat)

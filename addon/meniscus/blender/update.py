@@ -17,7 +17,7 @@ import traceback
 import bpy
 
 from .. import api, cache, playback, sequence
-from . import arguments as pipeline, mesh_update, render_policy, render_state, sources
+from . import arguments as pipeline, fluid_domain, mesh_update, render_policy, render_state, sources
 from .surfaces import STATUS_LINE_SEPARATOR, is_surface, surface_objects  # noqa: F401  (re-exported for callers)
 
 
@@ -404,21 +404,30 @@ def _load_cached_file(mesh, settings, path):
                          f"{loaded:.2f} s loading + {blender_seconds:.2f} s in Blender", attribute_note)
 
 
-def _object_source(obj, settings, mesh, depsgraph, for_render):
+def _object_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render):
     source = settings.source_object
     if source is None:
         raise SurfaceError("No source object set")
     if source == obj:
         raise SurfaceError("A surface cannot be its own source")
     wanted = cache.parse_attribute_names(settings.attribute_names)
-    positions, attributes, kind = sources.object_particles(source, depsgraph, wanted)
+    domain = None
+    if fluid_domain.is_liquid_domain(source):
+        positions, attributes, kind, particles = fluid_domain.read_particles(source, scene_time, api)
+        if fluid_domain.core_fills_narrow_band(api):
+            domain = fluid_domain.fluid_domain(source, scene, depsgraph, getattr(particles, "fluid_domain", None))
+    else:
+        positions, attributes, kind = sources.object_particles(source, depsgraph, wanted)
+    if len(positions) == 0:
+        raise SurfaceError(f"'{source.name}' has no particles at frame {int(round(scene_time))} ({kind})")
     arguments = reconstruction_arguments(settings, for_render)
     # The positions themselves are the key: the source may change without a frame change (an edit, a re-bake).
     key = ("OBJECT", source.name, sources.digest(positions), tuple(sorted(arguments.items())), tuple(wanted),
            settings.use_custom_normals)
 
     def work():
-        result = cache.reconstruct_positions(positions, attributes, arguments, wanted)
+        with_domain = arguments if domain is None else {**arguments, "fluid_domain": domain}
+        result = cache.reconstruct_positions(positions, attributes, with_domain, wanted)
         return _show_reconstruction(mesh, settings, f"{source.name}: {kind}" + (" (render)" if for_render else ""), result)
 
     return key, work, f"object '{source.name}'"
@@ -535,7 +544,7 @@ def update_surface(obj, scene, force=False, depsgraph=None):
                 # A live simulation moves at every shutter step; one surface per frame is enough (the velocity
                 # attribute carries the motion), so subframes keep what the frame built.
                 return False
-            key, work, source = _object_source(obj, settings, mesh, depsgraph, for_render)
+            key, work, source = _object_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render)
         else:
             key, work, source = _file_source(obj, settings, mesh, scene_time, for_render)
 
@@ -571,9 +580,9 @@ def update_surface(obj, scene, force=False, depsgraph=None):
         _memory.last_error[pointer] = message
         status = message if expected else f"Error: {message}"
         if exported:
-            status = _apply_export_policy(obj, settings, mesh, scene_time, frame, message)
+            status = _apply_export_policy(obj, settings, mesh, scene, scene_time, frame, message)
         elif for_render:
-            status = _apply_render_policy(obj, settings, mesh, scene_time, frame, render_policy.failure_message(
+            status = _apply_render_policy(obj, settings, mesh, scene, scene_time, frame, render_policy.failure_message(
                 name, frame, source, message))
         else:
             mesh_update.clear_surface(mesh)
@@ -591,12 +600,12 @@ def update_surface(obj, scene, force=False, depsgraph=None):
         return True
 
 
-def _apply_render_policy(obj, settings, mesh, scene_time, frame, message):
+def _apply_render_policy(obj, settings, mesh, scene, scene_time, frame, message):
     """In a final render, what a frame that cannot be built shows (see render_policy); returns the status text.
     STOP does not return in a render without a UI."""
     policy = settings.render_failure
     if policy == render_policy.HOLD:
-        held = _hold_earlier_frame(obj, settings, mesh, scene_time)
+        held = _hold_earlier_frame(obj, settings, mesh, scene, scene_time)
         if held is not None:
             print(f"{message}\nMeniscus: holding {held[0]} instead")
             return _status_lines(f"Holding {held[0]} (this frame failed)", held[1])
@@ -609,25 +618,25 @@ def _apply_render_policy(obj, settings, mesh, scene_time, frame, message):
     return message
 
 
-def _apply_export_policy(obj, settings, mesh, scene_time, frame, message):
+def _apply_export_policy(obj, settings, mesh, scene, scene_time, frame, message):
     """In an export, what a frame that cannot be built shows: the render policy's frame, without stopping Blender
     (the export itself fails afterwards under Stop, naming every such frame); returns the status text."""
-    held = _hold_earlier_frame(obj, settings, mesh, scene_time) if settings.render_failure == render_policy.HOLD \
-        else None
+    holding = settings.render_failure == render_policy.HOLD
+    held = _hold_earlier_frame(obj, settings, mesh, scene, scene_time) if holding else None
     if held is not None:
         _export.failed[frame] = (message, held[0])
         return _status_lines(f"Holding {held[0]} (this frame failed)", held[1])
-    if settings.render_failure == render_policy.HOLD:
+    if holding:
         message += f"; no earlier frame could be built to hold (tried {render_policy.HOLD_TRIES})"
     _export.failed[frame] = (message, None)
     mesh_update.clear_surface(mesh)
     return message
 
 
-def _hold_earlier_frame(obj, settings, mesh, scene_time):
+def _hold_earlier_frame(obj, settings, mesh, scene, scene_time):
     """Builds the nearest earlier file frame that builds; returns (its file name, status) or None."""
-    if settings.source_type == "OBJECT" and not settings.use_cache:  # a live object has no earlier frames
-        return None
+    if settings.source_type == "OBJECT" and not settings.use_cache:
+        return _hold_earlier_domain_frame(obj, settings, mesh, scene, scene_time)
     try:
         pattern = resolve_cache_pattern(obj) if settings.use_cache else resolve_pattern(obj)
         frames = _memory.sequences.frames(pattern)
@@ -646,6 +655,24 @@ def _hold_earlier_frame(obj, settings, mesh, scene_time):
             return os.path.basename(path), _build_file(mesh, settings, path, arguments, wanted, True)
         except Exception as error:
             print(f"Meniscus: cannot hold {path} either: {error}")
+    return None
+
+
+def _hold_earlier_domain_frame(obj, settings, mesh, scene, scene_time):
+    """A fluid domain's nearest earlier baked frame that builds; a live object has no earlier frames (None)."""
+    source = settings.source_object
+    if not fluid_domain.is_liquid_domain(source):
+        return None
+    try:
+        baked = fluid_domain.baked_scene_frames(source)
+    except Exception:  # the cache folder is unusable: nothing to hold
+        return None
+    for scene_frame in render_policy.earlier_frames(baked, int(round(scene_time))):
+        try:
+            _, work, _ = _object_source(obj, settings, mesh, scene, None, scene_frame, for_render=True)
+            return os.path.basename(fluid_domain.particle_file(source, scene_frame)), work()
+        except Exception as error:
+            print(f"Meniscus: cannot hold frame {scene_frame} of '{source.name}' either: {error}")
     return None
 
 

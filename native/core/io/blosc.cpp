@@ -76,7 +76,7 @@ const char* decode_lz4(const unsigned char* in, std::size_t in_size, unsigned ch
         if (literals == 15 && !add_length_extension(in, in_size, ip, literals)) return "a literal length runs past the end";
         if (literals > in_size - ip) return "literals run past the end of the stream";
         if (literals > out_size - op) return "literals run past the end of the output";
-        std::memcpy(out + op, in + ip, literals);
+        if (literals) std::memcpy(out + op, in + ip, literals);
         ip += literals;
         op += literals;
         if (ip == in_size) break;  // the last sequence has literals only
@@ -108,7 +108,7 @@ void blosc_decompress(const std::string& path, const unsigned char* in, std::siz
     if (flags & kBitShuffle) fail(path, what + ": Blosc bit-shuffle is not supported (byte shuffle is)");
     if (flags & kMemcpyed) {
         if (size - 16 < nbytes) bad("stored data of " + std::to_string(nbytes) + " bytes in a frame of " + std::to_string(size));
-        std::memcpy(out, in + 16, nbytes);
+        if (nbytes) std::memcpy(out, in + 16, nbytes);  // out may be null when nothing is expected
         return;
     }
     const int compressor = static_cast<int>(flags >> 5);
@@ -152,7 +152,8 @@ void blosc_decompress(const std::string& path, const unsigned char* in, std::siz
             unsigned char* o = out + b * block_size;
             for (std::size_t i = 0; i < elements; ++i)
                 for (std::size_t k = 0; k < type_size; ++k) o[i * type_size + k] = unshuffled[k * elements + i];
-            std::memcpy(o + elements * type_size, unshuffled.data() + elements * type_size, this_block - elements * type_size);
+            if (this_block > elements * type_size)
+                std::memcpy(o + elements * type_size, unshuffled.data() + elements * type_size, this_block - elements * type_size);
         }
     }
 }

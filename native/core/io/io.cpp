@@ -170,8 +170,9 @@ ParticleData read_particles_from_bytes(const std::string& path, Bytes bytes) {
             format = ParticleFormat::xyz;
         else
             fail(path, "unknown particle file format: the content is none of legacy VTK ('# vtk DataFile'), VTK XML "
-                       "('<VTKFile'), BGEO ('BgeoV' or Houdini JSON geometry), PLY ('ply'), NumPy ('\\x93NUMPY' or a zip), Mantaflow UNI ('PB02'), or CSV with "
-                       "an x,y,z header, plain or gzip-compressed; raw float32 XYZ files need the extension .xyz");
+                       "('<VTKFile'), BGEO ('BgeoV' or Houdini JSON geometry), PLY ('ply'), NumPy ('\\x93NUMPY' or a zip), "
+                       "Mantaflow UNI ('PB02'), OpenVDB (' BDV'), or CSV with an x,y,z header, plain or gzip-compressed; "
+                       "raw float32 XYZ files need the extension .xyz");
     }
     Source source{path, bytes.data(), bytes.size(), decompressed};
     switch (format) {

@@ -23,7 +23,6 @@ constexpr std::int32_t kParticleInvalid = 1 << 30;
 // 0.1 * 25 = 2.5 time units (frameLengthRaw), whatever the frame rate.
 constexpr double kMantaflowTimeUnitsPerSecond = 2.5;
 
-constexpr std::size_t kUniHeaderBytes = 4 + 6 * 4 + 256 + 8;  // magic, 6 ints, info string, timestamp
 constexpr std::size_t kConfigBytes = 204;
 constexpr int kMaxGridCells = 1 << 16;  // per axis; far beyond any domain Blender can bake
 
@@ -307,7 +306,7 @@ ParticleData read_mantaflow_uni_particles(const Source& source) {
         const auto w = world_of_grid(domain, g[0], g[1], g[2]);
         for (int k = 0; k < 3; ++k) out.positions.push_back(static_cast<float>(w[k]));
         if (!velocity.empty())
-            for (float w : world_velocity(domain, &velocity[3 * i])) out.attributes[0].values.push_back(w);
+            for (float v : world_velocity(domain, &velocity[3 * i])) out.attributes[0].values.push_back(v);
     }
     out.fluid_domain = domain;
     return out;

@@ -206,7 +206,8 @@ IndexToWorld VdbReader::read_transform() {
 // grid's compression flags.
 void VdbReader::read_data(unsigned char* out, std::size_t bytes, const std::string& what) {
     if (!(compression_ & (kCompressBlosc | kCompressZip))) {
-        std::memcpy(out, c_.take(bytes, what), bytes);
+        const unsigned char* in = c_.take(bytes, what);
+        if (bytes) std::memcpy(out, in, bytes);  // out may be null for no values
         return;
     }
     const std::size_t at = c_.pos();
@@ -215,7 +216,8 @@ void VdbReader::read_data(unsigned char* out, std::size_t bytes, const std::stri
         if (static_cast<std::uint64_t>(-size) != bytes)
             c_.fail(what + ": a stored block of " + std::to_string(-size) + " bytes at " + c_.where(at) + " where " +
                     std::to_string(bytes) + " are expected");
-        std::memcpy(out, c_.take(bytes, what), bytes);
+        const unsigned char* in = c_.take(bytes, what);
+        if (bytes) std::memcpy(out, in, bytes);
         return;
     }
     const unsigned char* in = c_.take(static_cast<std::uint64_t>(size), what);
@@ -407,20 +409,20 @@ ParticleData VdbReader::read_point_grid(const std::string& name, std::uint64_t b
     for (std::size_t l = 0; l < leaves.size(); ++l) {
         Leaf& leaf = leaves[l];
         c_.take(kLeafVoxels / 8, "a leaf's value mask");
-        const std::size_t at = c_.pos();
+        const std::size_t voxels_at = c_.pos();
         const unsigned bytes = load_le16(c_.take(2, "a leaf's voxel buffer size"));
         unsigned char raw[kLeafVoxels * 4];
         if (bytes == 0xffff) {
             std::memcpy(raw, c_.take(sizeof raw, "a leaf's voxel offsets"), sizeof raw);
         } else {
             const unsigned char* in = c_.take(bytes, "a leaf's compressed voxel offsets");
-            blosc_decompress(c_.source().path, in, bytes, raw, sizeof raw, grid + " leaf " + std::to_string(l) + " voxel offsets at " + c_.where(at));
+            blosc_decompress(c_.source().path, in, bytes, raw, sizeof raw, grid + " leaf " + std::to_string(l) + " voxel offsets at " + c_.where(voxels_at));
         }
         std::uint32_t previous = 0;
         for (std::size_t v = 0; v < kLeafVoxels; ++v) {
             leaf.end_offsets[v] = load_le32(raw + 4 * v);
             if (leaf.end_offsets[v] < previous)
-                c_.fail(grid + ": leaf " + std::to_string(l) + " has decreasing point offsets (voxel " + std::to_string(v) + ", data at " + c_.where(at) + ")");
+                c_.fail(grid + ": leaf " + std::to_string(l) + " has decreasing point offsets (voxel " + std::to_string(v) + ", data at " + c_.where(voxels_at) + ")");
             previous = leaf.end_offsets[v];
         }
         total += leaf.points();
@@ -473,11 +475,11 @@ ParticleData VdbReader::read_point_grid(const std::string& name, std::uint64_t b
             if (h.paged) {
                 Page& page = pages[a][handles[a][l].page];
                 if (page_fill[a] == page_end) {
-                    const std::size_t at = c_.pos();
+                    const std::size_t page_at = c_.pos();
                     page.data.resize(static_cast<std::size_t>(page.uncompressed));
                     if (page.compressed > 0)
                         blosc_decompress(c_.source().path, c_.take(page.compressed, "a compressed page"), static_cast<std::size_t>(page.compressed),
-                                         page.data.data(), page.data.size(), what + " (page at " + c_.where(at) + ")");
+                                         page.data.data(), page.data.size(), what + " (page at " + c_.where(page_at) + ")");
                     else
                         std::memcpy(page.data.data(), c_.take(page.data.size(), "a stored page"), page.data.size());
                     page_fill[a] = 0;
