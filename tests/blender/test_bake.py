@@ -7,6 +7,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import time
 
 import bpy
 import numpy as np
@@ -121,7 +122,8 @@ def test_cancelled_rebake_plays_no_frame_of_the_old_parameters():
     summary = bake.finish_bake(surface, job, stored, scene)
     check(job.cancelled and job.completed == 1, summary)
     check(f"Baked 1 of {len(BAKED)} frames" in summary and "(cancelled)" in summary and
-          "3 cached frames (29-31) are from an earlier bake, made with cube_size 1.2, now 1.3" in summary, summary)
+          "3 cached frames (29-31) are from an earlier bake, made with 'Render Cube Size' 1.2, now 1.3" in summary,
+          summary)
     scene.frame_set(30)
     status = settings.status
     check(not settings.status_is_error and "Stale baked frame fluid_0030.npz" in status and
@@ -138,6 +140,21 @@ def test_cancelled_rebake_plays_no_frame_of_the_old_parameters():
         check("fluid_0030.npz (cache)" in settings.status and "Stale" not in settings.status, settings.status)
     scene.frame_set(28)
     check("Stale baked frame fluid_0028.npz" in settings.status, settings.status)
+    # Without the particle files there is nothing to rebuild from: the stale frame is refused, not played.
+    particles = settings.file_pattern
+    settings.render_cube_size = 1.3
+    settings.file_pattern = os.path.join(_temporary.name, "moved_away", "double_dam_break_####.vtk")
+    try:
+        scene.frame_set(31)
+        check(settings.status_is_error and mesh_counts(surface) == (0, 0) and
+              "Stale baked frame fluid_0031.npz: made with 'Render Cube Size' 1.2, now 1.3; bake again" in
+              settings.status, settings.status)
+        settings.render_cube_size = old_size
+        scene.frame_set(30)
+        check(not settings.status_is_error and "fluid_0030.npz (cache)" in settings.status, settings.status)
+    finally:
+        settings.file_pattern = particles
+        settings.render_cube_size = old_size
     # Re-bake the range so the tests after this one find a cache of the current parameters.
     check(bpy.ops.meniscus.bake(object_name=surface.name, use_surface_range=False, frame_start=BAKED[0],
                                 frame_end=BAKED[-1]) == {"FINISHED"}, "re-bake")
@@ -266,6 +283,11 @@ def test_bake_refuses_what_it_cannot_do():
         check("No particle files" in str(error), str(error))
     else:
         raise AssertionError("a range without files should be refused")
+    # Issue 32, item 7: a range of two thousand million frames costs what its files cost, not a loop over its numbers.
+    started = time.perf_counter()
+    job, _stored = bake.prepare_bake(surface, -2 ** 31, 2 ** 31 - 1)
+    check(job.total == len(update.available_frames(surface)) and time.perf_counter() - started < 5,
+          (job.total, time.perf_counter() - started))
 
 
 def test_unwritable_cache_is_refused_before_any_frame_and_killed_bakes_are_cleaned():

@@ -84,7 +84,7 @@ def test_reexported_job_redoes_the_frames_of_other_settings():
     settings = surface.meniscus
     settings.render_cube_size = 1.3
     scene.frame_set(20)
-    check("Stale baked frame fluid_0020.ply (made with cube_size 1.2, now 1.3)" in settings.status, settings.status)
+    check("Stale baked frame fluid_0020.ply (made with 'Render Cube Size' 1.2, now 1.3)" in settings.status, settings.status)
     check(bpy.ops.meniscus.export_farm_job(object_name=surface.name, directory=job_folder, chunk_size=1,
                                            meniscus_command=CLI) == {"FINISHED"}, "export")
     with open(os.path.join(job_folder, "parameters.json")) as f:

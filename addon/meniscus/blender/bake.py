@@ -90,8 +90,9 @@ def prepare_bake(obj, frame_start=None, frame_end=None, scene=None):
     first = settings.frame_start if frame_start is None else frame_start
     last = settings.frame_end if frame_end is None else frame_end
     stored, pattern = _cache_pattern_for_bake(obj)
-    tasks = [cache.BakeTask(frame, frames[frame], pattern.path(frame)) for frame in range(first, last + 1)
-             if frame in frames]
+    # The files' frames within the range, not the range's numbers: a range typed as 0-2147483647 costs nothing.
+    tasks = [cache.BakeTask(frame, frames[frame], pattern.path(frame)) for frame in sorted(frames)
+             if first <= frame <= last]
     if not tasks:
         raise BakeError(f"No particle files in frames {first}-{last}")
     problem = cache.writable_folder_problem(pattern.directory)  # before any frame is reconstructed
@@ -134,7 +135,8 @@ def _stale_note(job):
         return ""
     frames = sorted(stale)
     return (f"; {len(frames)} cached frames ({sequence.describe_frames(frames)}) are from an earlier bake, "
-            f"{stale[frames[0]]}: they are rebuilt from the particle files, not played from the cache")
+            f"{pipeline.in_panel_terms(stale[frames[0]])}: they are rebuilt from the particle files, not played "
+            "from the cache")
 
 
 def _failure_note(job):

@@ -366,7 +366,8 @@ def _stale_cache_frame(obj, settings, path, file_frame):
     except SurfaceError as error:  # no bake could be current: rebuilding shows the refusal
         return f"the settings are refused: {error}"
     wanted = cache.parse_attribute_names(settings.attribute_names)
-    return cache.stale_reason(path, cache.provenance(_particle_file(obj, file_frame), arguments, wanted))
+    reason = cache.stale_reason(path, cache.provenance(_particle_file(obj, file_frame), arguments, wanted))
+    return pipeline.in_panel_terms(reason, for_render=True)  # a bake's cube size is the render one
 
 
 def _load_cached_file(mesh, settings, path):
