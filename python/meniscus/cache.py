@@ -133,9 +133,14 @@ def _process_alive(pid: int) -> bool:
     return True
 
 
+# A writer on another machine sharing the folder has a process id this one cannot check: its temporary file goes
+# only once untouched for this long (a write takes seconds).
+ABANDONED_AFTER_SECONDS = 600
+
+
 def remove_abandoned_partials(folder: str) -> List[str]:
-    """Removes the temporary files that killed writers left in folder (their process is gone; a live one's stay);
-    returns their names."""
+    """Removes the temporary files that killed writers left in folder (their process is gone and the file untouched
+    for ABANDONED_AFTER_SECONDS; a live one's stay); returns their names."""
     removed = []
     try:
         names = os.listdir(folder)
@@ -143,12 +148,14 @@ def remove_abandoned_partials(folder: str) -> List[str]:
         return removed
     for name in names:
         match = next((m for m in (p.fullmatch(name) for p in _PARTIAL_NAMES) if m), None)
-        if match and not _process_alive(int(match.group(1))):
-            try:
-                os.remove(os.path.join(folder, name))
+        path = os.path.join(folder, name)
+        try:
+            if match and not _process_alive(int(match.group(1))) and \
+                    time.time() - os.path.getmtime(path) > ABANDONED_AFTER_SECONDS:
+                os.remove(path)
                 removed.append(name)
-            except OSError:
-                pass
+        except OSError:
+            pass
     return removed
 
 

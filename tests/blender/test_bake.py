@@ -310,8 +310,10 @@ def test_unwritable_cache_is_refused_before_any_frame_and_killed_bakes_are_clean
     dead.wait()  # a process id that is no longer alive
     left = [f"fluid_0028.partial{dead.pid}.npz", f".partial-{dead.pid}-fluid_0029.npz"]
     live = f"fluid_0030.partial{os.getpid()}.npz"
+    old = time.time() - cache.ABANDONED_AFTER_SECONDS - 60  # untouched since: not another machine's live write
     for name in left + [live]:
         open(os.path.join(folder, name), "wb").close()
+        os.utime(os.path.join(folder, name), (old, old))
     surface.meniscus.cache_pattern = os.path.join(folder, "fluid_####.npz")
     check(bpy.ops.meniscus.bake(object_name=surface.name, use_surface_range=False, frame_start=28,
                                 frame_end=28) == {"FINISHED"}, "bake")
