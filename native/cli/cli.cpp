@@ -36,6 +36,7 @@
 #include "io/frame_pattern.h"
 #include "io/io.h"
 #include "io/io_util.h"
+#include "io/provenance.h"
 #include "base/memory.h"
 #include "parameters_file.h"
 #include "base/parallel.h"
@@ -286,8 +287,9 @@ long process_id() {
 // Writes a mesh under a temporary name in the output's folder, then renames it: a process killed mid-write (a
 // preempted farm task) leaves no partial file under the output name, so an existing output is a complete one. The
 // temporary name keeps the extension (it chooses the format) and holds the process id (two runs of one frame, as
-// when a farm re-queues a task, do not write into each other's file).
-void write_mesh_completely(const TriMesh& mesh, const std::string& output, int threads) {
+// when a farm re-queues a task, do not write into each other's file). The mesh's provenance record (io/provenance.h)
+// is removed before the mesh is replaced and written after it: an output never sits beside another run's record.
+void write_mesh_completely(const TriMesh& mesh, const std::string& output, int threads, const std::string& provenance = "") {
     const fs::path target = path_from_utf8(output);
     const fs::path partial = target.parent_path() / path_from_utf8(".partial-" + std::to_string(process_id()) + "-" +
                                                                     path_to_utf8(target.filename()));
@@ -299,18 +301,27 @@ void write_mesh_completely(const TriMesh& mesh, const std::string& output, int t
         fs::remove(partial, error);
         throw;
     }
+    forget_provenance(output);
     fs::rename(partial, target, error);
     if (error) {
         std::error_code ignored;
         fs::remove(partial, ignored);
         throw FormatError(output + ": cannot move the finished mesh into place (" + error.message() + ")");
     }
+    if (!provenance.empty()) write_provenance(output, provenance);
 }
 
 // Runs one frame; returns the frame's JSON record. Throws on failure (the caller reports and goes on).
 json run_frame(const ReconstructArgs& args, const std::string& input, const std::string& output, const std::string& raw_output,
                Progress& progress) {
     const auto start = std::chrono::steady_clock::now();
+    // Before reading: a file that changes while it is read leaves a record that no longer matches it. One that cannot
+    // be identified gets no record (stale when looked at again); the reader says what is wrong with it.
+    std::string provenance;
+    try {
+        if (!output.empty()) provenance = provenance_record(args.parameters, args.attributes, input);
+    } catch (const FormatError&) {
+    }
     ParticleData particles = read_particles(input);
     const double read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::vector<AttributeInput> inputs;
@@ -350,7 +361,7 @@ json run_frame(const ReconstructArgs& args, const std::string& input, const std:
     // The raw mesh first: with --skip-existing, the output's presence means the frame is complete.
     const int write_threads = resolve_threads(args.parameters.execution.threads);  // the frame's share, as its pipeline
     if (!raw_output.empty()) write_mesh_completely(result.raw_mesh, raw_output, write_threads);
-    if (!output.empty()) write_mesh_completely(result.mesh, output, write_threads);
+    if (!output.empty()) write_mesh_completely(result.mesh, output, write_threads, provenance);
     result.stats.add_seconds("write", std::chrono::duration<double>(std::chrono::steady_clock::now() - write_start).count());
     json stats = stats_json(result.stats);
     for (auto& item : stats.items()) record[item.key()] = item.value();
@@ -445,14 +456,26 @@ void apply_frame_range(ReconstructArgs& args) {
     std::smatch match;
     if (!std::regex_match(args.frames, match, range))
         throw InputError("--frames takes FIRST-LAST or one frame number (e.g. 1-10), got '" + args.frames + "'");
+    // Checked before conversion: 99999999999999999999 is out of even a 64-bit long's range.
+    for (int k = 1; k <= 2; ++k)
+        if (match[k].matched && (match[k].length() > 11 || frame_number_problem(std::stoll(match[k].str()))))
+            throw InputError("--frames " + args.frames + ": " + match[k].str() + " is not " + allowed_frame_numbers());
     args.start = std::stol(match[1].str());
     args.end = match[2].matched ? std::stol(match[2].str()) : *args.start;
     if (*args.end < *args.start) throw InputError("--frames " + args.frames + ": the last frame is before the first");
 }
 
+// A range is bounded before anything is made per frame: a hand-edited one would otherwise take all memory.
+void check_frame_range(const ReconstructArgs& args, long first, long last) {
+    if (auto problem = frame_range_problem(first, last))
+        throw InputError((args.frames.empty() ? "-s/--start-index, -e/--end-index (or start, end in --parameters)"
+                                              : "--frames " + args.frames) + ": " + *problem);
+}
+
 int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
     require_parameters(args);
     apply_frame_range(args);
+    if (args.start && args.end) check_frame_range(args, *args.start, *args.end);  // --save-parameters too
     if (args.raw_normals)
         throw InputError("--output-raw-normals=on is not supported: Meniscus writes the smoothed normals only (leave it off, "
                          "or set --normals-smoothing-iters 0 for unsmoothed normals)");
@@ -492,6 +515,7 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
         std::vector<Frame> found = find_frames(*input_pattern, args.input, duplicates);
         const long first = args.start ? *args.start : (found.empty() ? 0 : found.front().number);
         const long last = args.end ? *args.end : (found.empty() ? -1 : found.back().number);
+        check_frame_range(args, first, last);  // before a job is made per frame
         std::map<long, Frame> by_number;
         for (auto& f : found) by_number[f.number] = f;
         // Every frame of the range is attempted; one that is missing is reported like a broken one.
@@ -517,7 +541,7 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
         progress.message("note: -d/--double-precision has no effect in Meniscus: in splashsurf itself, double precision moves "
                          "vertices by at most 0.4 % of a cube (median 0.001 %) and gives the same triangles (README, Command line)");
     std::vector<json> records(jobs.size());
-    std::atomic<std::size_t> next{0}, done{0}, failed{0}, skipped{0};
+    std::atomic<std::size_t> next{0}, done{0}, failed{0}, skipped{0}, redone{0};
     std::atomic<bool> interrupted{false};
     std::mutex hooks_mutex;
     auto work = [&] {
@@ -534,8 +558,19 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
             json record;
             std::error_code exists_error;
             try {
-                if (args.skip_existing && !job.output.empty() && fs::exists(path_from_utf8(job.output), exists_error)) {
-                    // Outputs appear complete or not at all (write_mesh_completely): one that exists is done.
+                std::string stale;  // why an existing output is not this run's (--skip-existing redoes it)
+                const bool exists = args.skip_existing && !job.output.empty() && fs::exists(path_from_utf8(job.output), exists_error);
+                if (exists && !frame.path.empty())
+                    stale = provenance_mismatch(job.output, provenance_record(args.parameters, args.attributes, frame.path));
+                if (!stale.empty()) {
+                    ++redone;
+                    progress.message("redoing " + job.output + ": " + stale);
+                    record = run_frame(frame_args, frame.path, job.output, job.raw_output, progress);
+                    record["redone"] = stale;
+                    if (record.contains("failed")) ++failed;
+                } else if (exists) {
+                    // Outputs appear complete or not at all (write_mesh_completely), and this one was made from the
+                    // same particle file with the same parameters: it is done.
                     ++skipped;
                     record = {{"input", frame.path}, {"output", job.output}, {"skipped", "the output exists (--skip-existing)"}};
                 } else if (frame.path.empty()) {
@@ -591,6 +626,7 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
     report["total_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     report["failed_frames"] = failed.load();
     report["skipped_frames"] = skipped.load();
+    report["redone_frames"] = redone.load();
     // Which frames failed, by number in a sequence (by input otherwise), for the farm task's log and for --stats.
     std::string failed_names;
     report["failed"] = json::array();
@@ -611,7 +647,12 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
         std::fprintf(stderr, "%s: %.0f particles -> %.0f triangles in %.3f s\n", args.input.c_str(), r["counts"]["particles"].get<double>(),
                      r["counts"]["triangles"].get<double>(), r["seconds"]["total"].get<double>());
     }
-    if (skipped && !args.quiet) std::fprintf(stderr, "%zu of %zu frames skipped: their output exists\n", skipped.load(), jobs.size());
+    if (skipped && !args.quiet)
+        std::fprintf(stderr, "%zu of %zu frames skipped: their output exists, made with the same parameters and input\n",
+                     skipped.load(), jobs.size());
+    if (redone)
+        std::fprintf(stderr, "%zu of %zu frames redone: their output was made with other parameters or input\n",
+                     redone.load(), jobs.size());
     if (failed) std::fprintf(stderr, "%zu of %zu frames failed: %s\n", failed.load(), jobs.size(), failed_names.c_str());
     if (interrupted) return kExitInterrupted;
     return failed ? 1 : 0;
@@ -730,8 +771,16 @@ int run_cli(const std::vector<std::string>& arguments, const CliHooks& hooks) {
     reconstruct->add_option("-o,--output-file", args.output,
                             "Output mesh (.ply, .obj, .vtk); {} or #### for the frame number (default: {input name}_surface.vtk)");
     reconstruct->add_option("--output-dir", args.output_dir, "Folder for the output files (created if missing; default: the current folder)");
-    reconstruct->add_option("-s,--start-index", args.start, "First frame of a sequence");
-    reconstruct->add_option("-e,--end-index", args.end, "Last frame of a sequence");
+    // Checked as typed, before conversion: a number beyond 64 bits would reach the range check clamped.
+    const CLI::Validator frame_number(
+        [](std::string& text) -> std::string {
+            const bool digits = text.size() <= 11 && std::regex_match(text, std::regex(R"(-?\d+)"));
+            if (digits && !frame_number_problem(std::stoll(text))) return "";
+            return "must be " + allowed_frame_numbers() + ", got " + text;
+        },
+        "FRAME");
+    reconstruct->add_option("-s,--start-index", args.start, "First frame of a sequence")->check(frame_number);
+    reconstruct->add_option("-e,--end-index", args.end, "Last frame of a sequence")->check(frame_number);
     reconstruct->add_option("--frames", args.frames, "Frames FIRST-LAST of a sequence (a farm task's chunk), instead of -s/-e")
         ->excludes("-s")->excludes("-e");
     reconstruct->add_option("--parameters", args.parameters_path,
@@ -741,8 +790,9 @@ int run_cli(const std::vector<std::string>& arguments, const CliHooks& hooks) {
                             "Write every pipeline parameter with the input, output and frames to this JSON file and stop "
                             "(nothing is reconstructed)");
     reconstruct->add_flag("--skip-existing", args.skip_existing,
-                          "Skip frames whose output exists (outputs are written under a temporary name and renamed when "
-                          "complete, so an existing one is complete): a re-queued farm task redoes only what is missing");
+                          "Skip frames whose output exists and was made with the same parameters and particle file (its record "
+                          "OUTPUT.meniscus says; others are redone). Outputs are written under a temporary name and renamed when "
+                          "complete, so an existing one is complete: a re-queued farm task redoes only what is missing or stale");
     reconstruct->add_option("--stats", args.stats_path, "Write per-stage seconds, counts and peak memory as JSON");
     reconstruct->add_option("-a,--interpolate-attribute,--interpolate_attribute", args.attributes,
                             "Particle attribute to carry onto the mesh (repeatable); whole-number fields (ids) come from the "

@@ -63,10 +63,32 @@ std::string text_of(const json& value, const std::string& source, const std::str
 
 long frame_of(const json& value, const std::string& source, const std::string& key) {
     if (!value.is_number_integer()) refuse(source, key, "must be a whole frame number, got " + shown(value));
-    return value.get<long>();
+    // Read wide: 18446744073709551615 (unsigned in JSON) must not wrap round to -1.
+    if (value.is_number_unsigned() && value.get<unsigned long long>() > static_cast<unsigned long long>(kMaxFrameNumber))
+        refuse(source, key, "must be " + allowed_frame_numbers() + ", got " + shown(value));
+    if (auto problem = frame_number_problem(value.get<long long>())) refuse(source, key, *problem);
+    return static_cast<long>(value.get<long long>());
 }
 
 }  // namespace
+
+std::string allowed_frame_numbers() {
+    return "a frame number from " + std::to_string(-kMaxFrameNumber) + " to " + std::to_string(kMaxFrameNumber);
+}
+
+std::optional<std::string> frame_number_problem(long long frame) {
+    if (frame >= -kMaxFrameNumber && frame <= kMaxFrameNumber) return std::nullopt;
+    return "must be " + allowed_frame_numbers() + ", got " + std::to_string(frame);
+}
+
+std::optional<std::string> frame_range_problem(long long first, long long last) {
+    if (auto problem = frame_number_problem(first)) return "the first frame " + *problem;
+    if (auto problem = frame_number_problem(last)) return "the last frame " + *problem;
+    if (last - first + 1 > kMaxFrameCount)
+        return "frames " + std::to_string(first) + "-" + std::to_string(last) + " are " + std::to_string(last - first + 1) +
+               " frames, more than the " + std::to_string(kMaxFrameCount) + " one run takes (split the range)";
+    return std::nullopt;
+}
 
 std::string parameters_file_text(const ParametersFile& file) {
     json out = json::object();
@@ -114,6 +136,8 @@ ParametersFile parse_parameters_file(const std::string& text, const std::string&
     if (root.contains("output")) file.output = text_of(root["output"], source, "output");
     if (root.contains("start")) file.start = frame_of(root["start"], source, "start");
     if (root.contains("end")) file.end = frame_of(root["end"], source, "end");
+    if (file.start && file.end)
+        if (auto problem = frame_range_problem(*file.start, *file.end)) refuse(source, "end", *problem);
     if (root.contains("interpolate_attributes")) {
         const json& names = root["interpolate_attributes"];
         if (!names.is_array()) refuse(source, "interpolate_attributes", "must be a list of attribute names, got " + shown(names));

@@ -25,6 +25,18 @@ struct ParametersFile {
     std::optional<std::vector<std::string>> attributes;
 };
 
+// Frame numbers a run takes and the most frames it spans, checked before it lists (and allocates for) its frames: a
+// hand-edited "end": 9223372036854775807 would otherwise ask for a job per frame. Nine digits fit a 32-bit long
+// (Windows) and every simulation's numbering; 100 000 frames are over an hour at 24 fps.
+inline constexpr long kMaxFrameNumber = 999999999;
+inline constexpr long long kMaxFrameCount = 100000;
+// What is wrong with frames first..last ("frame numbers go from -999999999 to 999999999, got 1e+19"), or nothing.
+std::optional<std::string> frame_range_problem(long long first, long long last);
+// "a frame number from -999999999 to 999999999"
+std::string allowed_frame_numbers();
+// What is wrong with one frame number, or nothing.
+std::optional<std::string> frame_number_problem(long long frame);
+
 // The file's text; every schema parameter is written, vectors unset as null.
 std::string parameters_file_text(const ParametersFile& file);
 // Reads a file's text; `source` names it in messages. InputError naming the key for an unknown key, a value of the

@@ -18,6 +18,8 @@
 #include "io/frame_pattern.h"
 #include "io/io.h"
 #include "parameters.h"
+#include "io/provenance.h"
+#include "parameters_file.h"
 #include "pipeline.h"
 #include "sph/interior_fill.h"
 #include "analysis/quality.h"
@@ -430,6 +432,28 @@ PYBIND11_MODULE(_core, m) {
         }
         return problem ? py::object(py::str(*problem)) : py::object(py::none());
     }, py::arg("name"), py::arg("value"), "What is wrong with a value for a parameter ('must be ..., got ...'), or None.");
+    // Provenance (io/provenance.h): the add-on's bakes and cache playback, and the farm's re-export check.
+    m.def("provenance_record", [](const py::dict& parameters, const std::vector<std::string>& attributes, const std::string& source) {
+        return provenance_record(parameters_from_python(parameters), attributes, source);
+    }, py::arg("parameters"), py::arg("attributes"), py::arg("source"),
+          "The provenance record of a mesh made from the particle file source with these reconstruct() parameters.");
+    m.def("provenance_mismatch", &provenance_mismatch, py::arg("mesh_path"), py::arg("expected"),
+          "Why the mesh file is not the one the record describes, in words; '' when it is.");
+    m.def("forget_provenance", &forget_provenance, py::arg("mesh_path"), "Removes a mesh file's provenance record.");
+    m.def("write_provenance", &write_provenance, py::arg("mesh_path"), py::arg("record"),
+          "Writes a mesh file's provenance record (atomically).");
+    // Frame ranges (native/cli/parameters_file.h): the farm's parameters files are bounded as the command line's.
+    m.def("frame_number_problem", [](const py::int_& frame) -> py::object {
+        int overflow = 0;
+        const long long value = PyLong_AsLongLongAndOverflow(frame.ptr(), &overflow);
+        if (overflow) return py::str("must be " + allowed_frame_numbers() + ", got " + py::repr(frame).cast<std::string>());
+        const auto problem = frame_number_problem(value);
+        return problem ? py::object(py::str(*problem)) : py::object(py::none());
+    }, py::arg("frame"), "What is wrong with a frame number, or None.");
+    m.def("frame_range_problem", [](long long first, long long last) -> py::object {
+        const auto problem = frame_range_problem(first, last);
+        return problem ? py::object(py::str(*problem)) : py::object(py::none());
+    }, py::arg("first"), py::arg("last"), "What is wrong with frames first..last (bounded numbers), or None.");
     m.def("format_number", &format_number, py::arg("value"), "A number as people write it (0, 0.5, 2.5e-06).");
     m.def("run_cli", &run_cli_in_python, py::arg("arguments"),
           "Runs the meniscus command line (arguments[0] is the program name); returns the exit status.");

@@ -13,6 +13,7 @@ Two formats:
 from __future__ import annotations
 
 import os
+import re
 import threading
 import time
 from dataclasses import dataclass, field
@@ -20,7 +21,7 @@ from typing import Callable, Dict, List, Optional, Sequence
 
 import numpy as np
 
-from . import api
+from . import _core, api
 
 NPZ, PLY = "NPZ", "PLY"
 FORMAT_EXTENSIONS = {NPZ: ".npz", PLY: ".ply"}
@@ -36,11 +37,24 @@ _NPZ_ATTRIBUTE_PREFIX = "attribute:"
 
 # Reading and writing cached meshes ------------------------------------------------------------------------------
 
-def save_mesh(mesh: api.Mesh, path: str) -> None:
-    """Writes a mesh by extension (.npz here, others through the core), atomically.
+def provenance(source: Optional[str], arguments: dict, wanted: Sequence[str] = ()) -> str:
+    """The record (native/core/io/provenance.h) of a mesh built from the particle file `source` with api.reconstruct's
+    keyword `arguments` and the wanted attribute names; source None: of the parameters alone (its file is gone)."""
+    return _core.provenance_record(dict(arguments), list(wanted), source or "")
+
+
+def stale_reason(mesh_path: str, record: str) -> str:
+    """Why the mesh file was not made as `record` says ("made with particle_radius 0.025, now 0.03", "no record of
+    what it was made from"); '' when it was."""
+    return _core.provenance_mismatch(mesh_path, record)
+
+
+def save_mesh(mesh: api.Mesh, path: str, record: Optional[str] = None) -> None:
+    """Writes a mesh by extension (.npz here, others through the core), atomically, with its provenance record.
 
     The file appears under its final name only when complete (written next to it, then renamed): a player that
-    scrubs while a bake runs never loads half a file.
+    scrubs while a bake runs never loads half a file. The old record goes before the mesh is replaced and the new
+    one (if given) comes after it: a mesh never sits beside a record of other parameters.
     """
     folder = os.path.dirname(path)
     if folder:
@@ -65,6 +79,7 @@ def save_mesh(mesh: api.Mesh, path: str) -> None:
                 np.savez(stream, **arrays)
         else:
             api.write_mesh(mesh, temporary)
+        _core.forget_provenance(path)
         os.replace(temporary, path)
     except BaseException:
         try:
@@ -72,6 +87,76 @@ def save_mesh(mesh: api.Mesh, path: str) -> None:
         except OSError:
             pass
         raise
+    if record is not None:
+        _core.write_provenance(path, record)
+
+
+def writable_folder_problem(folder: str) -> Optional[str]:
+    """Why meshes cannot be written into folder (made if missing), or None: checked before a bake reconstructs its
+    first frame, so that an unwritable cache costs a message, not a bake's worth of lost frames."""
+    try:
+        os.makedirs(folder, exist_ok=True)
+        probe = os.path.join(folder, f".meniscus-write-check{os.getpid()}")
+        with open(probe, "wb"):
+            pass
+        os.remove(probe)
+    except OSError as error:
+        return error.strerror or str(error)
+    return None
+
+
+# The temporary names of a bake's (save_mesh: fluid_0023.partial4711.npz) and of the command line's
+# (.partial-4711-fluid_0023.ply) writes, with the writer's process id.
+_PARTIAL_NAMES = (re.compile(r".+\.partial(\d+)\.[^.]+"), re.compile(r"\.partial-(\d+)-.+"))
+
+
+def _process_alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    if os.name == "nt":  # signal 0 is CTRL_C_EVENT there: ask for the process's exit code instead
+        import ctypes
+
+        kernel32 = ctypes.windll.kernel32
+        handle = kernel32.OpenProcess(0x1000, False, pid)  # PROCESS_QUERY_LIMITED_INFORMATION
+        if not handle:
+            return ctypes.GetLastError() == 5  # access denied: it exists
+        code = ctypes.c_ulong()
+        alive = kernel32.GetExitCodeProcess(handle, ctypes.byref(code)) and code.value == 259  # STILL_ACTIVE
+        kernel32.CloseHandle(handle)
+        return bool(alive)
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    return True
+
+
+# A writer on another machine sharing the folder has a process id this one cannot check: its temporary file goes
+# only once untouched for this long (a write takes seconds).
+ABANDONED_AFTER_SECONDS = 600
+
+
+def remove_abandoned_partials(folder: str) -> List[str]:
+    """Removes the temporary files that killed writers left in folder (their process is gone and the file untouched
+    for ABANDONED_AFTER_SECONDS; a live one's stay); returns their names."""
+    removed = []
+    try:
+        names = os.listdir(folder)
+    except OSError:
+        return removed
+    for name in names:
+        match = next((m for m in (p.fullmatch(name) for p in _PARTIAL_NAMES) if m), None)
+        path = os.path.join(folder, name)
+        try:
+            if match and not _process_alive(int(match.group(1))) and \
+                    time.time() - os.path.getmtime(path) > ABANDONED_AFTER_SECONDS:
+                os.remove(path)
+                removed.append(name)
+        except OSError:
+            pass
+    return removed
 
 
 def load_mesh(path: str) -> api.Mesh:
@@ -204,6 +289,24 @@ class BakeJob:
     def cancel(self) -> None:
         self._cancel.set()
 
+    def task_arguments(self, task: BakeTask) -> dict:
+        return {**self.arguments, **task.arguments} if task.arguments else self.arguments
+
+    def stale_frames(self) -> Dict[int, str]:
+        """Frames not baked by this job (cancelled before them) whose file in the cache was made otherwise, with
+        why: they must not play as if this bake had made them."""
+        stale = {}
+        for task in self.tasks[self.completed:]:
+            if os.path.exists(task.target):
+                try:
+                    reason = stale_reason(task.target, provenance(task.source, self.task_arguments(task),
+                                                                  self.wanted_attributes))
+                except (api.FormatError, OSError) as error:  # the particle file is gone meanwhile
+                    reason = str(error)
+                if reason:
+                    stale[task.frame] = reason
+        return stale
+
     def step(self) -> bool:
         """Bakes the next frame; returns False when there is nothing left (finished or cancelled)."""
         if self._cancel.is_set():
@@ -217,12 +320,17 @@ class BakeJob:
         started = time.perf_counter()
         result = None
         try:
-            arguments = {**self.arguments, **task.arguments} if task.arguments else self.arguments
+            arguments = self.task_arguments(task)
+            try:  # before reading (see native/core/io/provenance.h); without one the frame counts as stale later
+                record = provenance(task.source, arguments, self.wanted_attributes)
+            except (api.FormatError, OSError):
+                record = None  # the reader says what is wrong with the file
             result = reconstruct_file(task.source, arguments, self.wanted_attributes)
-            save_mesh(result.mesh, task.target)
+            save_mesh(result.mesh, task.target, record)
         except (api.FormatError, OSError, MemoryError, ValueError) as error:
             self.failures[task.frame] = str(error) or type(error).__name__
             # A stale file from an earlier bake would play as if this frame had worked: remove it.
+            _core.forget_provenance(task.target)
             try:
                 os.remove(task.target)
             except OSError:

@@ -68,6 +68,13 @@ def _farm(argv) -> int:
                      " (or those keys in --parameters)")
     # Absolute paths in the job: workers run in other folders.
     document["input"], document["output"] = os.path.abspath(document["input"]), os.path.abspath(document["output"])
+    survey = farm.survey_outputs(document, document["start"], document["end"])
+    if not survey.frames:
+        sys.stderr.write(f"error: no particle files match '{document['input']}' in frames "
+                         f"{document['start']}-{document['end']}: the job would only fail\n")
+        return 2
+    for line in survey.lines():
+        print(line)
     text = json.dumps(document, indent=2) + "\n"
     bundle = farm.write_openjd_bundle(options.bundle, text, document["input"], document["output"], document["start"],
                                       document["end"], options.chunk_size, options.meniscus_command, options.name)
@@ -104,6 +111,9 @@ def _reconstruct_on_scheduler(argv) -> int:
             return 2
         first = min(frames) if first is None else first
         last = max(frames) if last is None else last
+    if skip_existing:
+        for line in farm.survey_outputs(document, first, last).lines():
+            sys.stderr.write(line + "\n")
     try:
         from distributed import Client
     except ImportError:

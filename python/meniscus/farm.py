@@ -41,6 +41,12 @@ def parameters_file_text(parameters: Dict[str, object], input: Optional[str] = N
             if problem:
                 raise ValueError(f"{p.name}: {problem}")
         values[p.name] = None if value is None else (list(convert(p, value)) if p.type == "vector3" else convert(p, value))
+    for key, frame in (("start", start), ("end", end)):
+        problem = None if frame is None else _core.frame_number_problem(int(frame))
+        if problem:
+            raise ValueError(f"{key}: {problem}")
+    if start is not None and end is not None and _core.frame_range_problem(int(start), int(end)):
+        raise ValueError(f"end: {_core.frame_range_problem(int(start), int(end))}")
     document = {"meniscus_parameters": PARAMETERS_FILE_VERSION}
     for key, value in (("input", input), ("output", output), ("start", start), ("end", end)):
         if value is not None:
@@ -71,6 +77,59 @@ def chunks(first: int, last: int, size: int) -> List[Tuple[int, int]]:
     if last < first:
         raise ValueError(f"frame range is empty: first {first} > last {last}")
     return [(a, min(a + size - 1, last)) for a in range(first, last + 1, size)]
+
+
+@dataclass
+class OutputSurvey:
+    """What a job over a parameters file's frames finds before it runs: the frames with a particle file, those
+    without (their tasks would fail), and those whose output exists but was made with other parameters or another
+    particle file (native/core/io/provenance.h), with why: --skip-existing redoes them."""
+    frames: List[int]
+    missing: List[int]
+    stale: Dict[int, str]
+
+    def lines(self) -> List[str]:
+        from .sequence import describe_frames
+
+        lines = []
+        if self.missing:
+            lines.append(f"warning: {len(self.missing)} frames have no particle file and will fail: "
+                         f"{describe_frames(self.missing)}")
+        if self.stale:
+            first = min(self.stale)
+            lines.append(f"{len(self.stale)} frames will be redone, their output being from another run "
+                         f"({describe_frames(self.stale)}; frame {first}: {self.stale[first]})")
+        return lines
+
+
+def survey_outputs(document: dict, first: int, last: int) -> OutputSurvey:
+    """Surveys frames first..last of a parameters file (as a dict) against its input and output folders."""
+    from .sequence import parse_pattern
+
+    input_pattern = parse_pattern(document["input"])
+    inputs = input_pattern.list_frames()
+    output = document.get("output")
+    arguments = {name: value for name, value in document.get("parameters", {}).items()}
+    attributes = list(document.get("interpolate_attributes", []))
+    frames, stale = [], {}
+    # Only the frames that exist are looked at: a range refused as too long never gets here (the parameters file's
+    # range is bounded), and the listing is one folder read.
+    for frame in sorted(f for f in inputs if first <= f <= last):
+        frames.append(frame)
+        if not output:
+            continue
+        if "{}" in output:  # the input's digits as written, as the command line names its outputs
+            digits = input_pattern.match(os.path.basename(inputs[frame]))[1]
+            target = output.replace("{}", digits, 1)
+        else:
+            target = parse_pattern(output, sibling_names=()).path(frame)
+        if os.path.exists(target):
+            reason = _core.provenance_mismatch(target, _core.provenance_record(arguments, attributes, inputs[frame]))
+            if reason:
+                stale[frame] = reason
+    present = set(frames)  # the range is bounded (parameters files and flags are checked before a job is written)
+    missing = [frame for frame in range(first, last + 1) if frame not in present]
+    return OutputSurvey(frames, missing, stale)
 
 
 # ---- Open Job Description bundles --------------------------------------------------------------------------------
@@ -241,7 +300,7 @@ def _reconstruct_chunk(parameters_text: str, first: int, last: int, skip_existin
     records = []
     for frame in report["frames"]:
         record = {"frame": frame.get("frame"), "output": frame.get("output")}
-        for key in ("failed", "skipped"):
+        for key in ("failed", "skipped", "redone"):
             if key in frame:
                 record[key] = frame[key]
         if "seconds" in frame:

@@ -172,3 +172,14 @@ def frame_range(frames: Dict[int, str]) -> Optional[Tuple[int, int]]:
         return None
     numbers: List[int] = list(frames)
     return min(numbers), max(numbers)
+
+
+def describe_frames(frames: Iterable[int]) -> str:
+    """Frame numbers as people write them: [1, 2, 3, 7, 9, 10] -> '1-3, 7, 9-10'."""
+    spans: List[List[int]] = []
+    for frame in sorted(set(frames)):
+        if spans and frame == spans[-1][1] + 1:
+            spans[-1][1] = frame
+        else:
+            spans.append([frame, frame])
+    return ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in spans)

@@ -7,6 +7,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import time
 
 import bpy
 import numpy as np
@@ -67,7 +68,8 @@ def test_bake_operator_writes_one_file_per_frame():
     check(result == {"FINISHED"}, result)
     folder = os.path.dirname(cache_pattern)
     names = sorted(os.listdir(folder))
-    check(names == [f"fluid_{frame:04d}.npz" for frame in BAKED], names)
+    # Each frame with its provenance record (what it was made from: native/core/io/provenance.h).
+    check(names == sorted([f"fluid_{frame:04d}.npz{record}" for frame in BAKED for record in ("", ".meniscus")]), names)
     check(surface.meniscus.use_cache, "after a bake the surface should play from the cache")
     check("fluid_0029.npz (cache)" in surface.meniscus.status, surface.meniscus.status)
 
@@ -108,6 +110,56 @@ def test_turning_the_cache_off_reconstructs_again():
     check("fluid_0030.npz (cache)" in surface.meniscus.status, surface.meniscus.status)
 
 
+def test_cancelled_rebake_plays_no_frame_of_the_old_parameters():
+    """Issue 32, item 1: bake, change a parameter, bake again and cancel after one frame: the frames left from the
+    first bake are named in the summary and rebuilt from the particles, never played from the cache as current."""
+    settings = surface.meniscus
+    old_size = settings.render_cube_size  # what the bake uses, not the viewport
+    settings.render_cube_size = 1.3
+    job, stored = bake.prepare_bake(surface, BAKED[0], BAKED[-1], scene)
+    job.on_frame = lambda job_, _task, _result: job_.cancel()
+    job.run()
+    summary = bake.finish_bake(surface, job, stored, scene)
+    check(job.cancelled and job.completed == 1, summary)
+    check(f"Baked 1 of {len(BAKED)} frames" in summary and "(cancelled)" in summary and
+          "3 cached frames (29-31) are from an earlier bake, made with 'Render Cube Size' 1.2, now 1.3" in summary,
+          summary)
+    scene.frame_set(30)
+    status = settings.status
+    check(not settings.status_is_error and "Stale baked frame fluid_0030.npz" in status and
+          "rebuilt from the particles" in status and "double_dam_break_0030.vtk" in status, status)
+    stored_30 = cache.load_mesh(cache_pattern.replace("####", "0030"))
+    check(len(mesh_update.read_triangles(surface.data)) != len(stored_30.triangles), "the stale frame was played")
+    with _NoReconstruction():  # the frame the cancelled bake made is current: played from the cache
+        scene.frame_set(28)
+        check("fluid_0028.npz (cache)" in settings.status and "Stale" not in settings.status, settings.status)
+    # Back to the first bake's parameters: its frames are current again, frame 28 is the stale one.
+    settings.render_cube_size = old_size
+    with _NoReconstruction():
+        scene.frame_set(30)
+        check("fluid_0030.npz (cache)" in settings.status and "Stale" not in settings.status, settings.status)
+    scene.frame_set(28)
+    check("Stale baked frame fluid_0028.npz" in settings.status, settings.status)
+    # Without the particle files there is nothing to rebuild from: the stale frame is refused, not played.
+    particles = settings.file_pattern
+    settings.render_cube_size = 1.3
+    settings.file_pattern = os.path.join(_temporary.name, "moved_away", "double_dam_break_####.vtk")
+    try:
+        scene.frame_set(31)
+        check(settings.status_is_error and mesh_counts(surface) == (0, 0) and
+              "Stale baked frame fluid_0031.npz: made with 'Render Cube Size' 1.2, now 1.3; bake again" in
+              settings.status, settings.status)
+        settings.render_cube_size = old_size
+        scene.frame_set(30)
+        check(not settings.status_is_error and "fluid_0030.npz (cache)" in settings.status, settings.status)
+    finally:
+        settings.file_pattern = particles
+        settings.render_cube_size = old_size
+    # Re-bake the range so the tests after this one find a cache of the current parameters.
+    check(bpy.ops.meniscus.bake(object_name=surface.name, use_surface_range=False, frame_start=BAKED[0],
+                                frame_end=BAKED[-1]) == {"FINISHED"}, "re-bake")
+
+
 def test_background_job_reports_progress_and_cancels():
     frames = update.available_frames(surface)
     target = os.path.join(_temporary.name, "cancelled", "c_####.ply")
@@ -123,7 +175,8 @@ def test_background_job_reports_progress_and_cancels():
     check(job.wait(timeout=120), "the bake thread did not finish")
     check(job.done and job.cancelled and job.completed == 1, f"cancel after one frame: {job.completed} done")
     check(seen == [(20, 1, True)], seen)
-    check(sorted(os.listdir(os.path.dirname(target))) == ["c_0020.ply"], os.listdir(os.path.dirname(target)))
+    check(sorted(os.listdir(os.path.dirname(target))) == ["c_0020.ply", "c_0020.ply.meniscus"],
+          os.listdir(os.path.dirname(target)))
     check(not job.failures, job.failures)
 
 
@@ -136,7 +189,7 @@ def test_broken_frame_is_skipped_not_fatal():
     tasks = [cache.BakeTask(1, broken, out.format(1)), cache.BakeTask(2, good, out.format(2))]
     job = cache.BakeJob(tasks, update.reconstruction_arguments(surface.meniscus, True)).run()
     check(list(job.failures) == [1] and job.completed == 2, job.failures)
-    check(os.listdir(os.path.dirname(out)) == ["m_2.npz"], os.listdir(os.path.dirname(out)))
+    check(sorted(os.listdir(os.path.dirname(out))) == ["m_2.npz", "m_2.npz.meniscus"], os.listdir(os.path.dirname(out)))
 
 
 def _meniscus_cli():
@@ -160,7 +213,8 @@ def test_cache_written_by_the_command_line_plays():
             api.reconstruct(particles.positions, 0.025, cube_size=1.5,
                             attributes={"velocity": particles.attributes["velocity"]}).write(
                 os.path.join(folder, f"surface_{frame}.ply"))
-    check(sorted(os.listdir(folder)) == ["surface_30.ply", "surface_31.ply", "surface_32.ply"], os.listdir(folder))
+    check(sorted(name for name in os.listdir(folder) if not name.endswith(".meniscus")) ==
+          ["surface_30.ply", "surface_31.ply", "surface_32.ply"], os.listdir(folder))
     result = bpy.ops.meniscus.add_cache(filepath=os.path.join(folder, "surface_30.ply"))
     check(result == {"FINISHED"}, result)
     played = bpy.context.view_layer.objects.active
@@ -207,7 +261,7 @@ def test_command_line_bake_of_a_saved_blend():
     output = completed.stdout
     check("RESULT {'FINISHED'}" in output, output[-2000:])
     check("Baked 2 of 2 frames" in output, output[-2000:])
-    names = sorted(os.listdir(os.path.join(_temporary.name, "farm")))
+    names = sorted(name for name in os.listdir(os.path.join(_temporary.name, "farm")) if not name.endswith(".meniscus"))
     check(names == ["farm_0034.npz", "farm_0035.npz"], names)
 
 
@@ -229,6 +283,43 @@ def test_bake_refuses_what_it_cannot_do():
         check("No particle files" in str(error), str(error))
     else:
         raise AssertionError("a range without files should be refused")
+    # Issue 32, item 7: a range of two thousand million frames costs what its files cost, not a loop over its numbers.
+    started = time.perf_counter()
+    job, _stored = bake.prepare_bake(surface, -2 ** 31, 2 ** 31 - 1)
+    check(job.total == len(update.available_frames(surface)) and time.perf_counter() - started < 5,
+          (job.total, time.perf_counter() - started))
+
+
+def test_unwritable_cache_is_refused_before_any_frame_and_killed_bakes_are_cleaned():
+    """Issue 32, item 8: a cache folder that cannot be written costs a message, not a bake of lost frames; the
+    temporary files of a killed bake go the next time the folder is baked into (a live writer's stay)."""
+    blocker = os.path.join(_temporary.name, "a_file")
+    with open(blocker, "w") as stream:
+        stream.write("not a folder")
+    surface.meniscus.cache_pattern = os.path.join(blocker, "cache", "fluid_####.npz")
+    with _NoReconstruction():
+        try:
+            bpy.ops.meniscus.bake(object_name=surface.name, use_surface_range=False, frame_start=28, frame_end=29)
+        except RuntimeError as error:
+            check("Cache Files: cannot write to" in str(error) and "a_file" in str(error), str(error))
+        else:
+            raise AssertionError("a bake into an unwritable folder should be refused")
+    folder = os.path.join(_temporary.name, "killed")
+    os.makedirs(folder)
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()  # a process id that is no longer alive
+    left = [f"fluid_0028.partial{dead.pid}.npz", f".partial-{dead.pid}-fluid_0029.npz"]
+    live = f"fluid_0030.partial{os.getpid()}.npz"
+    old = time.time() - cache.ABANDONED_AFTER_SECONDS - 60  # untouched since: not another machine's live write
+    for name in left + [live]:
+        open(os.path.join(folder, name), "wb").close()
+        os.utime(os.path.join(folder, name), (old, old))
+    surface.meniscus.cache_pattern = os.path.join(folder, "fluid_####.npz")
+    check(bpy.ops.meniscus.bake(object_name=surface.name, use_surface_range=False, frame_start=28,
+                                frame_end=28) == {"FINISHED"}, "bake")
+    names = sorted(os.listdir(folder))
+    check(names == sorted(["fluid_0028.npz", "fluid_0028.npz.meniscus", live]), names)
+    surface.meniscus.cache_pattern = cache_pattern
 
 
 def _cleanup():

@@ -78,6 +78,26 @@ def test_surface_plays_the_meshes_the_farm_writes():
         check(mesh_counts(surface)[1] > 1000, mesh_counts(surface))
 
 
+def test_reexported_job_redoes_the_frames_of_other_settings():
+    """Issue 32, item 4: change a setting, export again into the same folders: the farm's earlier meshes are not
+    played as current meanwhile, the job says it will redo them, and its tasks (--skip-existing) redo them."""
+    settings = surface.meniscus
+    settings.render_cube_size = 1.3
+    scene.frame_set(20)
+    check("Stale baked frame fluid_0020.ply (made with 'Render Cube Size' 1.2, now 1.3)" in settings.status, settings.status)
+    check(bpy.ops.meniscus.export_farm_job(object_name=surface.name, directory=job_folder, chunk_size=1,
+                                           meniscus_command=CLI) == {"FINISHED"}, "export")
+    with open(os.path.join(job_folder, "parameters.json")) as f:
+        survey = addon.farm.survey_outputs(json.load(f), *FRAMES)
+    check(sorted(survey.stale) == list(FRAMES) and "2 frames will be redone" in survey.lines()[0], survey.lines())
+    result = subprocess.run([CLI, "reconstruct", "--parameters", os.path.join(job_folder, "parameters.json"), "--frames",
+                             "20-21", "--skip-existing", "-q"], capture_output=True, text=True, timeout=300)
+    check(result.returncode == 0 and "2 of 2 frames redone" in result.stderr, result.stderr)
+    scene.frame_set(21)
+    scene.frame_set(20)
+    check("fluid_0020.ply (cache)" in settings.status and "Stale" not in settings.status, settings.status)
+
+
 def test_export_without_a_saved_blend_or_folder_is_refused():
     result = None
     try:

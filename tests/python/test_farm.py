@@ -100,10 +100,12 @@ def test_skip_existing_redoes_only_missing_and_failures_are_named(cli, tmp_path)
     assert "1 of 6 frames failed: 3" in result.stderr and "fluid_0003.vtk" in result.stderr
     report = json.loads(stats.read_text())
     assert report["failed"] == [3] and report["failed_frames"] == 1
-    written = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "out").iterdir()}
+    written = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "out").iterdir() if p.suffix != ".meniscus"}
     assert sorted(written) == [f"surface_{n:04d}.ply" for n in FRAMES if n != 3]  # no temporary file is left
+    assert all((tmp_path / "out" / (name + ".meniscus")).is_file() for name in written)  # each with its provenance
     (tmp_path / "out" / "surface_0005.ply").unlink()
-    make_sequence(tmp_path / "in")  # frame 3 repaired
+    # Frame 3 repaired, alone: a particle file rewritten since makes its output stale (test_provenance.py).
+    (tmp_path / "in" / "fluid_0003.vtk").write_bytes((SEQUENCE / "double_dam_break_0003.vtk").read_bytes())
     result = run(cli, "reconstruct", inputs, "-o", out, "--frames", "1-6", *PIPELINE, "--skip-existing", "--stats", stats)
     assert result.returncode == 0, result.stderr
     assert "4 of 6 frames skipped" in result.stderr
@@ -176,7 +178,7 @@ def test_openjd_bundle_runs_in_chunks_like_a_local_run(cli, openjd, tmp_path):
     print(f"openjd run: 6 frames in chunks of 2: {seconds:.1f} s")
 
     # A re-run after losing one mesh redoes that one only.
-    mtimes = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "out").iterdir()}
+    mtimes = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "out").glob("*.ply")}
     (tmp_path / "out" / "surface_0004.ply").unlink()
     assert run(openjd, *openjd_run).returncode == 0
     assert meshes(tmp_path / "out") == reference

@@ -90,10 +90,15 @@ def prepare_bake(obj, frame_start=None, frame_end=None, scene=None):
     first = settings.frame_start if frame_start is None else frame_start
     last = settings.frame_end if frame_end is None else frame_end
     stored, pattern = _cache_pattern_for_bake(obj)
-    tasks = [cache.BakeTask(frame, frames[frame], pattern.path(frame)) for frame in range(first, last + 1)
-             if frame in frames]
+    # The files' frames within the range, not the range's numbers: a range typed as 0-2147483647 costs nothing.
+    tasks = [cache.BakeTask(frame, frames[frame], pattern.path(frame)) for frame in sorted(frames)
+             if first <= frame <= last]
     if not tasks:
         raise BakeError(f"No particle files in frames {first}-{last}")
+    problem = cache.writable_folder_problem(pattern.directory)  # before any frame is reconstructed
+    if problem:
+        raise BakeError(f"Cache Files: cannot write to '{pattern.directory}' ({problem})")
+    cache.remove_abandoned_partials(pattern.directory)  # left by a bake that was killed
     # Bakes are for final output: render resolution, and normals always (playback may switch custom normals on).
     try:
         arguments = update.reconstruction_arguments(settings, for_render=True, normals=True)
@@ -118,8 +123,20 @@ def finish_bake(obj, job, stored_pattern, scene=None):
         update.update_surface(obj, scene, force=True)
     summary = f"Baked {written} of {job.total} frames in {job.seconds:.1f} s"
     if job.cancelled:
-        summary += " (cancelled)"
+        summary += " (cancelled)" + _stale_note(job)
     return summary + _failure_note(job)
+
+
+def _stale_note(job):
+    """The frames a cancelled bake left from an earlier one with other parameters: named, never played as baked
+    (playback rebuilds them from the particle files, or refuses them without those)."""
+    stale = job.stale_frames()
+    if not stale:
+        return ""
+    frames = sorted(stale)
+    return (f"; {len(frames)} cached frames ({sequence.describe_frames(frames)}) are from an earlier bake, "
+            f"{pipeline.in_panel_terms(stale[frames[0]])}: they are rebuilt from the particle files, not played "
+            "from the cache")
 
 
 def _failure_note(job):

@@ -1,6 +1,7 @@
 """Export Farm Job: the selected surface's frame range as an Open Job Description job bundle (AWS Deadline Cloud's
 `deadline bundle submit`, any OpenJD runner) with its parameters file, and the surface pointed at the job's output
 folder, so that it plays the farm's meshes as its cache as they arrive. docs/farm.md."""
+import json
 import os
 
 import bpy
@@ -77,7 +78,12 @@ class MENISCUS_OT_export_farm_job(bpy.types.Operator):
         except FarmExportError as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
-        self.report({"INFO"}, f"Farm job written to {bundle.directory} ({len(bundle.tasks)} tasks)")
+        # What the job will redo (outputs of other parameters) and frames without particle files: said, not hidden.
+        with open(bundle.parameters_file, encoding="utf-8") as stream:
+            survey = farm.survey_outputs(json.load(stream), bundle.tasks[0][0], bundle.tasks[-1][1])
+        notes = "".join(f"; {line}" for line in survey.lines())
+        self.report({"WARNING"} if notes else {"INFO"},
+                    f"Farm job written to {bundle.directory} ({len(bundle.tasks)} tasks){notes}")
         return {"FINISHED"}
 
     def invoke(self, context, _event):

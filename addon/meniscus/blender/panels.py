@@ -82,7 +82,8 @@ class MENISCUS_PT_main(_SidebarPanel, bpy.types.Panel):
             icon = ("ERROR" if settings.status_is_error else "INFO") if index == 0 else "BLANK1"
             column.label(text=line, icon=icon)
         if settings.use_cache:
-            layout.label(text="Playing from cache: parameters apply at the next bake", icon="FILE_CACHE")
+            # Baked frames of other settings are rebuilt from the particles (update._stale_cache_frame), not played.
+            layout.label(text="Playing from cache: frames baked otherwise are rebuilt", icon="FILE_CACHE")
         if obj.mode == "EDIT":
             layout.label(text="Not updated while in Edit Mode", icon="EDITMODE_HLT")
 

@@ -382,10 +382,18 @@ def _cache_source(obj, settings, mesh, scene_time, for_render):
     lookup = _lookup(_memory.sequences.frames(pattern), pattern, scene_time, settings)
     key = ("CACHE", lookup.file_frame, lookup.path, _file_version(lookup.path), settings.use_custom_normals)
 
-    if lookup.path is None and lookup.file_frame is not None and settings.file_pattern and \
-            settings.source_type == "FILES":
+    has_particles = settings.file_pattern and settings.source_type == "FILES"
+    if lookup.path is None and lookup.file_frame is not None and has_particles:
         # Outside a partial bake: the particle files are still there, so the frame is rebuilt from them.
         return _file_source(obj, settings, mesh, scene_time, for_render)
+    stale = _stale_cache_frame(obj, settings, lookup.path, lookup.file_frame) if lookup.path and has_particles else ""
+    if stale:
+        name = os.path.basename(lookup.path)
+        particles = _particle_file(obj, lookup.file_frame)
+        if particles is None:  # nothing to rebuild it from: refused, never shown as if current
+            raise SurfaceError(f"Stale baked frame {name}: {stale}; bake again")
+        key, work, source = _file_source(obj, settings, mesh, scene_time, for_render)
+        return key, lambda: _status_lines(f"Stale baked frame {name} ({stale}): rebuilt from the particles", work()), source
 
     def work():
         if lookup.path is None:
@@ -393,6 +401,26 @@ def _cache_source(obj, settings, mesh, scene_time, for_render):
         return _load_cached_file(mesh, settings, lookup.path)
 
     return key, work, lookup.expected_path
+
+
+def _particle_file(obj, file_frame):
+    try:
+        return _memory.sequences.frames(resolve_pattern(obj)).get(file_frame)
+    except (SurfaceError, OSError, ValueError):
+        return None
+
+
+def _stale_cache_frame(obj, settings, path, file_frame):
+    """Why a baked frame was not made from this frame's particle file with the surface's current parameters (as a
+    bake would make it now: render settings, normals); '' when it was. Without the particle file, the parameters
+    alone are checked."""
+    try:
+        arguments = reconstruction_arguments(settings, for_render=True, normals=True)
+    except SurfaceError as error:  # no bake could be current: rebuilding shows the refusal
+        return f"the settings are refused: {error}"
+    wanted = cache.parse_attribute_names(settings.attribute_names)
+    reason = cache.stale_reason(path, cache.provenance(_particle_file(obj, file_frame), arguments, wanted))
+    return pipeline.in_panel_terms(reason, for_render=True)  # a bake's cube size is the render one
 
 
 def _load_cached_file(mesh, settings, path):
@@ -651,6 +679,10 @@ def _hold_earlier_frame(obj, settings, mesh, scene, scene_time):
         path = frames[file_frame]
         try:
             if settings.use_cache:
+                stale = _stale_cache_frame(obj, settings, path, file_frame) if settings.file_pattern and \
+                    settings.source_type == "FILES" else ""
+                if stale:  # a frame of other parameters is no better to hold than none
+                    raise SurfaceError(f"stale baked frame ({stale})")
                 return os.path.basename(path), _load_cached_file(mesh, settings, path)
             return os.path.basename(path), _build_file(mesh, settings, path, arguments, wanted, True)
         except Exception as error:
