@@ -16,13 +16,14 @@ section() { echo "== $* ($((SECONDS - started)) s)"; }
 # 120 s.
 export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-PASSIVE}"
 
-# What only downloads runs beside the builds, which use the cores: the Debian packages of the Windows and clang
-# builds, the bpy wheels of the Blender suites (300-400 MB each) and the benchmark's reference venv. The packages the
-# development build needs come first (setup.sh's apt-get must not wait for the other one's lock).
-require_packages "${MENISCUS_BUILD_PACKAGES[@]}" blender xvfb
+# What only downloads runs beside the builds, which use the cores: the Debian packages of the clang build, the bpy
+# wheels of the Blender suites (300-400 MB each) and the benchmark's reference venv. The packages the development
+# build and scripts/package.sh (mingw-w64 and Wine, for the Windows packages) need come first (their apt-get must not
+# wait for the other one's lock).
+require_packages "${MENISCUS_BUILD_PACKAGES[@]}" "${MENISCUS_WINDOWS_PACKAGES[@]}" blender xvfb
 mkdir -p build
 (
-  require_packages "${MENISCUS_CLANG_PACKAGES[@]}" "${MENISCUS_WINDOWS_PACKAGES[@]}"
+  require_packages "${MENISCUS_CLANG_PACKAGES[@]}"
   for blender_version in 4.2 4.5 5.0 5.2; do bpy_venv "$blender_version" > /dev/null; done
   source bench/reference_venv.sh
 ) > build/downloads.log 2>&1 &
@@ -55,6 +56,9 @@ done
 section "Windows: mingw-w64 cross-build, tests under Wine"
 bash scripts/build_windows.sh > build/windows.log 2>&1 || { tail -60 build/windows.log; exit 1; }
 grep -E "^All tests passed|^test cases|largest vertex difference|matches" build/windows.log
+section "Windows packages: the win_amd64 wheels in Windows CPython 3.10 and 3.11 under Wine (tests/windows/run.sh)"
+bash tests/windows/run.sh > build/windows-packages.log 2>&1 || { tail -60 build/windows-packages.log; exit 1; }
+grep -E "^== |^\(|passed|refused|written|readers:" build/windows-packages.log
 section "clang++ with libc++ and libomp (macOS's toolchain)"
 bash scripts/build_clang.sh > build/clang.log 2>&1 || { tail -60 build/clang.log; exit 1; }
 grep -E "^All tests passed|^test cases|largest vertex difference|matches" build/clang.log

@@ -601,7 +601,7 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
         }
     report["peak_memory_bytes"] = peak_rss_bytes();
     if (!args.stats_path.empty()) {
-        std::ofstream out(path_from_utf8(args.stats_path));
+        std::ofstream out(path_from_utf8(args.stats_path), std::ios::binary);  // "\n" line ends on Windows too
         out << report.dump(2) << "\n";
         if (!out) throw FormatError(args.stats_path + ": cannot write the statistics file");
     }
@@ -664,7 +664,7 @@ int inspect_command(const std::string& mesh_path, const std::string& raw_path, c
             std::printf("ratios at L = 2 r: hfL %.4f, heat %.4f\n", report["hfl_ratio"].get<double>(), report["heat_bumpiness_ratio"].get<double>());
     }
     if (!json_path.empty()) {
-        std::ofstream out(path_from_utf8(json_path));
+        std::ofstream out(path_from_utf8(json_path), std::ios::binary);  // "\n" line ends on Windows too
         out << report.dump(2) << "\n";
         if (!out) throw FormatError(json_path + ": cannot write the report");
     }
