@@ -76,6 +76,21 @@ PYTHON
   echo "$dir"
 }
 
+# windows_bpy VERSION: prints the folder where the Windows `bpy` VERSION from PyPI (win_amd64 wheel, about 330 MB) is
+# unpacked with the numpy it needs, for a Windows CPython 3.11 under Wine (PYTHONPATH); made once under build/windows/.
+windows_bpy() {
+  local version="$1" dir="build/windows/bpy-$1"
+  if [ ! -f "$dir/.meniscus-complete" ]; then
+    rm -rf "$dir"
+    python3 -m pip install -q --no-deps --only-binary=:all: --platform win_amd64 --python-version 3.11 \
+      --disable-pip-version-check --root-user-action=ignore --target "$dir" "bpy==$version.*" numpy==1.26.4 \
+      2>&1 | { grep -v "^WARNING: Location" >&2 || true; }
+    [ "${PIPESTATUS[0]}" -eq 0 ] || return 1
+    touch "$dir/.meniscus-complete"
+  fi
+  echo "$dir"
+}
+
 # mingw_cmake_arguments: sets the array MINGW_CMAKE_ARGUMENTS to the CMake options of a mingw-w64 cross build (the
 # toolchain, mingw's static zlib and libgomp, Debian's header-only libraries).
 mingw_cmake_arguments() {

@@ -299,11 +299,10 @@ void write_mesh_completely(const TriMesh& mesh, const std::string& output, int t
         fs::remove(partial, error);
         throw;
     }
-    fs::rename(partial, target, error);
-    if (error) {
-        std::error_code ignored;
-        fs::remove(partial, ignored);
-        throw FormatError(output + ": cannot move the finished mesh into place (" + error.message() + ")");
+    const std::string failure = replace_file(path_to_utf8(partial), output);
+    if (!failure.empty()) {
+        fs::remove(partial, error);
+        throw FormatError(output + ": cannot move the finished mesh into place (" + failure + ")");
     }
 }
 

@@ -14,6 +14,7 @@ import shutil
 import subprocess
 import sys
 import sysconfig
+import threading
 
 import meniscus
 
@@ -123,6 +124,26 @@ def main():
         if b"\r\n" in path.read_bytes():
             fail(f"{path} has CRLF line ends")
     print(f"text outputs without CRLF: {len(texts)} files")
+
+    # Replacing a mesh that another program has open for reading, as a player or viewer does while a farm re-renders
+    # a frame: Windows refuses the rename until that program lets go (Python's open, like most programs' readers,
+    # does not share delete access), so the writer waits for it a while, then says which file it could not replace.
+    replaced = out / "replaced.ply"
+    run([cli, "reconstruct", frame, "-o", replaced, *ARGUMENTS])
+    other_frame = shared / "splashsurf" / "double_dam_break_frame_01_4732_particles.vtk"
+    with open(replaced, "rb") as reader:
+        threading.Timer(1.0, reader.close).start()
+        run([cli, "reconstruct", other_frame, "-o", replaced, *ARGUMENTS])
+    expected = meniscus.reconstruct(meniscus.read_particles(other_frame).positions, 0.025)
+    if len(meniscus.read_mesh(replaced).triangles) != len(expected.triangles):
+        fail("the mesh that was open for reading was not replaced by the new one")
+    with open(replaced, "rb"):
+        refused = run([cli, "reconstruct", frame, "-o", replaced, *ARGUMENTS], expect_success=False)
+    if refused.returncode == 0 or "replaced.ply" not in refused.stderr:
+        fail(f"replacing a file held open: exit {refused.returncode}, stderr {refused.stderr!r}")
+    if len(meniscus.read_mesh(replaced).triangles) != len(expected.triangles):
+        fail("a refused replacement changed the file")
+    print(f"replacing a mesh open in another program: waited for it; refused after a while ({refused.stderr.strip()})")
 
     # A path longer than Windows' classic limit (260 characters): written, or refused with a message naming it.
     long_folder = out.joinpath(*["a-rather-long-folder-name-for-a-shot" for _ in range(8)])

@@ -2,7 +2,10 @@
 # The Windows packages of dist/ (scripts/package_windows.sh) tested under Wine, as scripts/test.sh's Windows section
 # runs them: each win_amd64 wheel installed with pip into its Windows CPython from PyPI (scripts/lib.sh:
 # windows_python), then tests/windows/test_wheels.py (the Python API, the console script, readers, exit codes,
-# non-ASCII names, a long path, against the Linux build). Needs the Linux build (build/bin/meniscus) and dist/.
+# non-ASCII names, a long path, against the Linux build); then the headless Blender suite (tests/blender/run.sh) with
+# the extension zip installed into the Windows `bpy` 4.5 from PyPI in Windows CPython 3.11 (tests/windows/python-wine).
+# Needs the Linux build (build/bin/meniscus), the mingw-w64 build (build-windows/, scripts/build_windows.sh: the
+# command line the farm and bake tests run) and dist/.
 #   bash tests/windows/run.sh
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -10,7 +13,16 @@ source scripts/lib.sh
 require_packages "${MENISCUS_WINDOWS_PACKAGES[@]}"
 version="$(sed -n 's/^project(meniscus VERSION \([0-9.]*\).*/\1/p' CMakeLists.txt)"
 export WINEPREFIX="$PWD/build/windows/wineprefix" WINEDEBUG=-all
-[ -d "$WINEPREFIX" ] || /usr/lib/wine/wine64 wineboot --init > /dev/null 2>&1 || true
+if [ ! -f "$WINEPREFIX/.meniscus-temp" ]; then
+  /usr/lib/wine/wine64 wineboot --init > /dev/null 2>&1 || true
+  # The temporary folder on drive Z: (Unix /tmp), beside the repository, as C:\ holds both on most Windows machines
+  # (Wine's default, C:\users\...\Temp, would put a test's .blend on another drive than the samples, where Blender
+  # rightly cannot store a relative path).
+  for variable in TEMP TMP; do
+    : | /usr/lib/wine/wine64 reg add 'HKCU\Environment' /v "$variable" /t REG_SZ /d 'Z:\tmp' /f 2>&1 | cat > /dev/null
+  done
+  touch "$WINEPREFIX/.meniscus-temp"
+fi
 
 numpy_version=1.26.4  # the last numpy whose win_amd64 wheels import under Debian 12's Wine 8 (2.x needs ucrtbase
                       # functions Wine lacks); it has no wheel for 3.13
@@ -27,3 +39,10 @@ for python_version in 3.10 3.11; do
     --numpy "$numpy" --linux-cli build/bin/meniscus
   echo "($((SECONDS - started)) s)"
 done
+
+echo "== Blender 4.5 (Windows bpy from PyPI, Windows CPython 3.11) under Wine with the Windows extension zip"
+started=$SECONDS
+MENISCUS_WINDOWS_PYTHON="$PWD/$(windows_python 3.11)" MENISCUS_WINDOWS_PYTHONPATH="$PWD/$(windows_bpy 4.5)" \
+  MENISCUS_BUILD="$PWD/build-windows" bash tests/blender/run.sh tests/windows/python-wine \
+  "dist/meniscus-$version-windows_x64.zip" extension
+echo "($((SECONDS - started)) s)"
