@@ -13,15 +13,19 @@ source scripts/lib.sh
 require_packages "${MENISCUS_WINDOWS_PACKAGES[@]}"
 version="$(sed -n 's/^project(meniscus VERSION \([0-9.]*\).*/\1/p' CMakeLists.txt)"
 export WINEPREFIX="$PWD/build/windows/wineprefix" WINEDEBUG=-all
-if [ ! -f "$WINEPREFIX/.meniscus-temp" ]; then
-  /usr/lib/wine/wine64 wineboot --init > /dev/null 2>&1 || true
-  # The temporary folder on drive Z: (Unix /tmp), beside the repository, as C:\ holds both on most Windows machines
-  # (Wine's default, C:\users\...\Temp, would put a test's .blend on another drive than the samples, where Blender
-  # rightly cannot store a relative path).
+# A user profile whose path has spaces and non-ASCII characters, as many Windows users' have: Blender's user folder
+# (add-on, extensions, core copies) and the temporary folder (the tests' .blend files and caches) live in it. It is
+# on drive Z: (Unix /), beside the repository, as C:\ holds both on most Windows machines (Wine's own temporary folder
+# on C: would put a test's .blend on another drive than the samples, where Blender rightly stores no relative path).
+profile="$PWD/build/windows/profile Usuário é 用户"
+mkdir -p "$profile/Temp"
+if [ "$(cat "$WINEPREFIX/.meniscus-profile" 2>/dev/null)" != "$profile" ]; then
+  [ -d "$WINEPREFIX" ] || /usr/lib/wine/wine64 wineboot --init > /dev/null 2>&1 || true
   for variable in TEMP TMP; do
-    : | /usr/lib/wine/wine64 reg add 'HKCU\Environment' /v "$variable" /t REG_SZ /d 'Z:\tmp' /f 2>&1 | cat > /dev/null
+    : | LC_ALL=C.UTF-8 /usr/lib/wine/wine64 reg add 'HKCU\Environment' /v "$variable" /t REG_SZ \
+      /d "Z:${profile//\//\\}\\Temp" /f 2>&1 | cat > /dev/null
   done
-  touch "$WINEPREFIX/.meniscus-temp"
+  echo "$profile" > "$WINEPREFIX/.meniscus-profile"
 fi
 
 numpy_version=1.26.4  # the last numpy whose win_amd64 wheels import under Debian 12's Wine 8 (2.x needs ucrtbase
@@ -42,7 +46,7 @@ done
 
 echo "== Blender 4.5 (Windows bpy from PyPI, Windows CPython 3.11) under Wine with the Windows extension zip"
 started=$SECONDS
-MENISCUS_WINDOWS_PYTHON="$PWD/$(windows_python 3.11)" MENISCUS_WINDOWS_PYTHONPATH="$PWD/$(windows_bpy 4.5)" \
+TMPDIR="$profile" MENISCUS_WINDOWS_PYTHON="$PWD/$(windows_python 3.11)" MENISCUS_WINDOWS_PYTHONPATH="$PWD/$(windows_bpy 4.5)" \
   MENISCUS_BUILD="$PWD/build-windows" bash tests/blender/run.sh tests/windows/python-wine \
   "dist/meniscus-$version-windows_x64.zip" extension
 echo "($((SECONDS - started)) s)"
