@@ -13,17 +13,8 @@ require_packages "${MENISCUS_WINDOWS_PACKAGES[@]}"
 wine=/usr/lib/wine/wine64  # Debian's wine64 package does not put its loader on PATH
 build=build-windows
 
-# Header-only libraries are architecture-independent: give the cross build Debian's copies, and nothing else from
-# /usr/include (glibc headers must not leak into a Windows build).
-headers="$build/header-only"
-mkdir -p "$headers"
-for dir in CLI nlohmann catch2; do ln -sfn "/usr/include/$dir" "$headers/$dir"; done
-
-/usr/bin/cmake -S . -B "$build" -DCMAKE_TOOLCHAIN_FILE="$PWD/cmake/toolchains/mingw-w64-x86_64.cmake" \
-  -DCMAKE_BUILD_TYPE=Release -DMENISCUS_BUILD_PYTHON=OFF -DMENISCUS_FETCH_DEPENDENCIES=OFF \
-  -DMENISCUS_DEPENDENCY_INCLUDE_DIRS="$PWD/$headers" -DZLIB_LIBRARY=/usr/x86_64-w64-mingw32/lib/libz.a \
-  -DZLIB_INCLUDE_DIR=/usr/x86_64-w64-mingw32/include \
-  -DOpenMP_gomp_LIBRARY="$(ls /usr/lib/gcc/x86_64-w64-mingw32/*-posix/libgomp.a | head -1)" > "$build-configure.log" 2>&1 || { cat "$build-configure.log"; exit 1; }
+mingw_cmake_arguments
+/usr/bin/cmake -S . -B "$build" "${MINGW_CMAKE_ARGUMENTS[@]}" -DMENISCUS_BUILD_PYTHON=OFF > "$build-configure.log" 2>&1 || { cat "$build-configure.log"; exit 1; }
 /usr/bin/cmake --build "$build" -j"$(nproc)"
 
 export WINEPREFIX="$PWD/$build/wineprefix" WINEDEBUG=-all

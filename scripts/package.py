@@ -11,8 +11,8 @@ Writes into --out:
                                             compiled core of every given wheel (one per Python version), plus the
                                             shared libraries the wheels vendor, next to the core.
 <platform> in file names uses '_' (linux_x64), as Blender's own `extension build --split-platforms` does.
-Called by scripts/package.sh (Linux, here) and by the hosted workflow (.github/workflows/wheels.yml) for Windows
-and macOS.
+Called by scripts/package.sh (Linux) and scripts/package_windows.sh (Windows, mingw-w64), here, and by the hosted
+workflow (.github/workflows/wheels.yml) for macOS and its MSVC build for Windows.
 """
 import argparse
 import pathlib
@@ -84,7 +84,8 @@ def vendored_core(wheel, folder):
             raise SystemExit(f"{wheel.name}: expected one compiled core, found {cores}")
         core = folder / pathlib.PurePosixPath(cores[0]).name
         core.write_bytes(archive.read(cores[0]))
-        # auditwheel (Linux) and delvewheel (Windows) put libraries in meniscus.libs/ beside the package; delocate
+        # auditwheel (Linux) and delvewheel (MSVC Windows build) put libraries in meniscus.libs/ beside the package (the
+        # mingw-w64 Windows cores have none: their runtimes are linked in); delocate
         # (macOS) in meniscus/.dylibs/, found through @loader_path, which the legacy layout keeps as it is.
         for name in names:
             if name.endswith("/"):

@@ -4,6 +4,8 @@
 #                                                                 (pip install: `import meniscus`, `meniscus` CLI)
 #   dist/meniscus-<version>-linux_x64.zip                         Blender 4.2+ extension (wheels for 3.11 and 3.13)
 #   dist/meniscus-<version>-legacy-linux_x64.zip                  Blender 3.4-4.1 add-on (cores for 3.10 and 3.11)
+#   the same for Windows (win_amd64 wheels, meniscus-<version>[-legacy]-windows_x64.zip), cross-built with mingw-w64
+#   by scripts/package_windows.sh from the Linux wheels' contents
 # Wheels are built by scikit-build-core from pyproject.toml and made manylinux by auditwheel (which vendors libgomp).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -33,5 +35,6 @@ for wheel in "$raw"/meniscus-"$version"-*.whl; do
   auditwheel repair -w dist "$wheel" > build/wheels/auditwheel.log 2>&1 || { cat build/wheels/auditwheel.log; exit 1; }
 done
 echo "== Blender add-on zips"
-"$tools/bin/python" scripts/package.py --platform linux-x64 --out dist dist/meniscus-"$version"-*.whl
+"$tools/bin/python" scripts/package.py --platform linux-x64 --out dist dist/meniscus-"$version"-*linux*.whl
+bash scripts/package_windows.sh
 ls -l dist

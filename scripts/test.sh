@@ -3,7 +3,8 @@
 #   C++ (Catch2) and Python (pytest) suites; the packages users install (wheels for CPython 3.10/3.11/3.13 and the
 #   Blender zips, built by scripts/package.sh) installed into clean environments; the headless Blender suite against
 #   the installed add-on on Debian's Blender 3.4 (legacy zip) and on bpy 4.2, 4.5, 5.0 and 5.2 (extension zip); the
-#   Windows cross-build under Wine and the clang/libc++/libomp build; the C++ suite under ASan/UBSan; a small run of
+#   Windows cross-build under Wine, the Windows wheels in Windows CPython and the Windows extension zip in Windows
+#   bpy 4.5 under Wine; the clang/libc++/libomp build; the C++ suite under ASan/UBSan; a small run of
 #   the speed benchmark against pysplashsurf.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -16,14 +17,16 @@ section() { echo "== $* ($((SECONDS - started)) s)"; }
 # 120 s.
 export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-PASSIVE}"
 
-# What only downloads runs beside the builds, which use the cores: the Debian packages of the Windows and clang
-# builds, the bpy wheels of the Blender suites (300-400 MB each) and the benchmark's reference venv. The packages the
-# development build needs come first (setup.sh's apt-get must not wait for the other one's lock).
-require_packages "${MENISCUS_BUILD_PACKAGES[@]}" blender xvfb
+# What only downloads runs beside the builds, which use the cores: the Debian packages of the clang build, the bpy
+# wheels of the Blender suites (300-400 MB each) and the benchmark's reference venv. The packages the development
+# build and scripts/package.sh (mingw-w64 and Wine, for the Windows packages) need come first (their apt-get must not
+# wait for the other one's lock).
+require_packages "${MENISCUS_BUILD_PACKAGES[@]}" "${MENISCUS_WINDOWS_PACKAGES[@]}" blender xvfb
 mkdir -p build
 (
-  require_packages "${MENISCUS_CLANG_PACKAGES[@]}" "${MENISCUS_WINDOWS_PACKAGES[@]}"
+  require_packages "${MENISCUS_CLANG_PACKAGES[@]}"
   for blender_version in 4.2 4.5 5.0 5.2; do bpy_venv "$blender_version" > /dev/null; done
+  windows_bpy 4.5 > /dev/null  # the Windows bpy for tests/windows/run.sh
   source bench/reference_venv.sh
 ) > build/downloads.log 2>&1 &
 downloads=$!
@@ -58,6 +61,9 @@ done
 section "Windows: mingw-w64 cross-build, tests under Wine"
 bash scripts/build_windows.sh > build/windows.log 2>&1 || { tail -60 build/windows.log; exit 1; }
 grep -E "^All tests passed|^test cases|largest vertex difference|matches" build/windows.log
+section "Windows packages under Wine: the wheels in Windows CPython 3.10 and 3.11, the extension zip in Windows bpy 4.5"
+bash tests/windows/run.sh > build/windows-packages.log 2>&1 || { tail -60 build/windows-packages.log; exit 1; }
+grep -E "^== |^\(|^PASS|^all|passed under|refused|written|readers:" build/windows-packages.log
 section "clang++ with libc++ and libomp (macOS's toolchain)"
 bash scripts/build_clang.sh > build/clang.log 2>&1 || { tail -60 build/clang.log; exit 1; }
 grep -E "^All tests passed|^test cases|largest vertex difference|matches" build/clang.log

@@ -6,7 +6,9 @@ a new library at the same path, where the dynamic loader hands back the old one 
 would run on the old core). A copy in a folder named by the core's content hash avoids both: a new build loads from
 a new path, a rewrite never touches a mapped file, and the same build reuses its copy.
 
-Windows locks a loaded library against writes, so there the installer cannot rewrite it and no copy is made.
+Windows locks a loaded library against writes and deletion: loaded in place, an installer could not replace it at
+all (the update would fail); the copy is what stays locked, and a copy that another Blender still runs is left for
+a later start to remove.
 """
 import hashlib
 import importlib.machinery
@@ -56,9 +58,9 @@ def _copy_build(source, package_dir, target):
 def load(module_name, package_dir, copies_root):
     """Loads the core of package_dir as module_name (e.g. 'meniscus._core') from its copy under copies_root and
     puts it into sys.modules, where the package's `from . import _core` finds it. Returns the path loaded, or None
-    when nothing was done (no core there, or Windows): the ordinary import then loads it in place."""
+    when nothing was done (no core there): the ordinary import then loads it in place."""
     source = core_file(package_dir)
-    if source is None or os.name == "nt":
+    if source is None:
         return None
     target = os.path.join(copies_root, _digest(source))
     copied = os.path.join(target, os.path.basename(package_dir), os.path.basename(source))
@@ -80,7 +82,7 @@ def load(module_name, package_dir, copies_root):
 
 def _remove_other_builds(copies_root, keep):
     # Copies of other builds: a Blender still running an older one keeps its mapping (unlinking never changes a
-    # mapped file), so they can go now.
+    # mapped file), so they can go now; on Windows its loaded copy cannot, and stays until a later start.
     for name in os.listdir(copies_root):
         if name != keep and ".partial-" not in name:
             shutil.rmtree(os.path.join(copies_root, name), ignore_errors=True)

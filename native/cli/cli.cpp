@@ -302,11 +302,10 @@ void write_mesh_completely(const TriMesh& mesh, const std::string& output, int t
         throw;
     }
     forget_provenance(output);
-    fs::rename(partial, target, error);
-    if (error) {
-        std::error_code ignored;
-        fs::remove(partial, ignored);
-        throw FormatError(output + ": cannot move the finished mesh into place (" + error.message() + ")");
+    const std::string failure = replace_file(path_to_utf8(partial), output);
+    if (!failure.empty()) {
+        fs::remove(partial, error);
+        throw FormatError(output + ": cannot move the finished mesh into place (" + failure + ")");
     }
     if (!provenance.empty()) write_provenance(output, provenance);
 }
@@ -638,7 +637,7 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
         }
     report["peak_memory_bytes"] = peak_rss_bytes();
     if (!args.stats_path.empty()) {
-        std::ofstream out(path_from_utf8(args.stats_path));
+        std::ofstream out(path_from_utf8(args.stats_path), std::ios::binary);  // "\n" line ends on Windows too
         out << report.dump(2) << "\n";
         if (!out) throw FormatError(args.stats_path + ": cannot write the statistics file");
     }
@@ -706,7 +705,7 @@ int inspect_command(const std::string& mesh_path, const std::string& raw_path, c
             std::printf("ratios at L = 2 r: hfL %.4f, heat %.4f\n", report["hfl_ratio"].get<double>(), report["heat_bumpiness_ratio"].get<double>());
     }
     if (!json_path.empty()) {
-        std::ofstream out(path_from_utf8(json_path));
+        std::ofstream out(path_from_utf8(json_path), std::ios::binary);  // "\n" line ends on Windows too
         out << report.dump(2) << "\n";
         if (!out) throw FormatError(json_path + ": cannot write the report");
     }

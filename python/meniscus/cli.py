@@ -124,7 +124,7 @@ def _reconstruct_on_scheduler(argv) -> int:
     for error in run.errors:
         sys.stderr.write(f"error: {error}\n")
     if stats_path:
-        with open(stats_path, "w", encoding="utf-8") as f:
+        with open(stats_path, "w", encoding="utf-8", newline="\n") as f:
             json.dump({"frames": run.records, "failed": sorted(run.failed), "failed_frames": len(run.failed),
                        "total_seconds": run.seconds, "scheduler": address}, f, indent=2)
     if run.failed:

@@ -201,7 +201,7 @@ def write_openjd_bundle(bundle_dir, parameters_text: str, input_pattern: str, ou
     output_dir, output_name = _split(output_pattern)
     os.makedirs(output_dir, exist_ok=True)
     parameters_file = os.path.join(bundle, "parameters.json")
-    with open(parameters_file, "w", encoding="utf-8") as f:
+    with open(parameters_file, "w", encoding="utf-8", newline="\n") as f:
         f.write(parameters_text)
     name = job_name or f"Meniscus {input_name} {first}-{last}"
 
@@ -274,7 +274,7 @@ def write_openjd_bundle(bundle_dir, parameters_text: str, input_pattern: str, ou
     for file_name, document in (("template.yaml", template), ("parameter_values.yaml", values),
                                 ("asset_references.yaml", assets)):
         paths[file_name] = os.path.join(bundle, file_name)
-        with open(paths[file_name], "w", encoding="utf-8") as f:
+        with open(paths[file_name], "w", encoding="utf-8", newline="\n") as f:
             f.write(header + _yaml(document) + "\n")
     return Bundle(bundle, paths["template.yaml"], paths["parameter_values.yaml"], paths["asset_references.yaml"],
                   parameters_file, frames, needed)
@@ -288,7 +288,7 @@ def _reconstruct_chunk(parameters_text: str, first: int, last: int, skip_existin
     with tempfile.TemporaryDirectory(prefix="meniscus-task-") as folder:
         parameters_file = os.path.join(folder, "parameters.json")
         stats_file = os.path.join(folder, "stats.json")
-        with open(parameters_file, "w", encoding="utf-8") as f:
+        with open(parameters_file, "w", encoding="utf-8", newline="\n") as f:
             f.write(parameters_text)
         arguments = ["reconstruct", "--parameters", parameters_file, "--frames", f"{first}-{last}", "--stats", stats_file, "-q"]
         status = run_cli(arguments + (["--skip-existing"] if skip_existing else []))

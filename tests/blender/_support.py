@@ -35,6 +35,10 @@ if AS_MODULE:
     bpy.ops.wm.read_factory_settings(use_empty=False)
 
 
+# The native command line of a build (MENISCUS_BUILD, else build/; tests/windows/run.sh names the mingw-w64 build).
+COMMAND_LINE = os.path.join(os.environ.get("MENISCUS_BUILD", str(REPO / "build")), "bin",
+                            "meniscus.exe" if os.name == "nt" else "meniscus")
+
 # Set by run.sh: which package was installed, and the fresh user folder it was installed into.
 ADDON_KIND = os.environ.get("MENISCUS_ADDON_KIND", "extension")
 USER_DIR = os.environ.get("MENISCUS_USER_DIR", "")

@@ -54,7 +54,8 @@ def test_installed_where_a_user_install_goes():
         check(len(installed) == 1, f"expected the one wheel for {python_tag}, found {installed}")
         cores = glob.glob(os.path.join(user_dir, "extensions", ".local", "lib", "python*", "site-packages",
                                        "meniscus", "_core.*"))
-        check(len(cores) == 1 and python_tag.replace("cp", "cpython-") in os.path.basename(cores[0]), cores)
+        # _core.cpython-311-x86_64-linux-gnu.so, _core.cp311-win_amd64.pyd
+        check(len(cores) == 1 and python_tag in os.path.basename(cores[0]).replace("cpython-", "cp"), cores)
 
 
 def test_preferences_saved():

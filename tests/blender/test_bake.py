@@ -193,8 +193,7 @@ def test_broken_frame_is_skipped_not_fatal():
 
 
 def _meniscus_cli():
-    path = _support.REPO / "build" / "bin" / "meniscus"
-    return str(path) if path.is_file() else None
+    return _support.COMMAND_LINE if os.path.isfile(_support.COMMAND_LINE) else None
 
 
 def test_cache_written_by_the_command_line_plays():

@@ -19,7 +19,7 @@ from _support import check, mesh_counts  # noqa: E402
 
 addon = _support.enable_addon()
 FRAMES = (20, 21)
-CLI = os.path.join(os.environ.get("MENISCUS_BUILD", str(_support.REPO / "build")), "bin", "meniscus")
+CLI = _support.COMMAND_LINE
 _temporary = tempfile.TemporaryDirectory(prefix="meniscus_farm_")
 _support.clear_scene()
 scene = bpy.context.scene

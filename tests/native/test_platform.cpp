@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <random>
 #include <string>
@@ -38,6 +39,35 @@ TEST_CASE("UTF-8 paths survive the round trip through the platform's path type",
     REQUIRE(path_to_utf8(path.parent_path()) == "fl\xc3\xbcssigkeit \xe7\xb2\x92\xe5\xad\x90");
     std::FILE* missing = open_file(name, "rb");
     REQUIRE(missing == nullptr);
+}
+
+TEST_CASE("a file being read is replaced in one step, and the reader keeps the old contents", "[platform]") {
+    // On Windows a rename over an open file fails unless its reader shares delete access: the core's readers do.
+    const std::filesystem::path folder = std::filesystem::temp_directory_path() / path_from_utf8("meniscus replace \xc3\xa9");
+    std::filesystem::create_directories(folder);
+    const std::string target = path_to_utf8(folder / "mesh.ply"), partial = path_to_utf8(folder / ".partial-mesh.ply");
+    auto write = [](const std::string& path, const char* text) {
+        std::FILE* file = open_file(path, "wb");
+        REQUIRE(file);
+        std::fputs(text, file);
+        std::fclose(file);
+    };
+    write(target, "old");
+    write(partial, "new");
+    std::FILE* reader = open_file(target, "rb");
+    REQUIRE(reader);
+    CHECK(replace_file(partial, target).empty());
+    char text[8] = {};
+    CHECK(std::fread(text, 1, 3, reader) == 3);
+    CHECK(std::string(text) == "old");
+    std::fclose(reader);
+    reader = open_file(target, "rb");
+    REQUIRE(reader);
+    CHECK(std::fread(text, 1, 3, reader) == 3);
+    CHECK(std::string(text) == "new");
+    std::fclose(reader);
+    CHECK_FALSE(replace_file(partial, target).empty());  // nothing left to move: the reason, not a crash
+    std::filesystem::remove_all(folder);
 }
 
 TEST_CASE("decimal text reads back every float exactly", "[platform]") {

@@ -2,6 +2,8 @@
 
 #include <cerrno>
 #include <cstdint>
+#include <cstring>
+#include <vector>
 
 #ifdef _WIN32
 #ifndef WIN32_LEAN_AND_MEAN
@@ -11,6 +13,7 @@
 #define NOMINMAX
 #endif
 #include <windows.h>
+#include <fcntl.h>
 #include <io.h>
 #include <psapi.h>
 #include <shellapi.h>
@@ -67,9 +70,98 @@ std::string path_to_utf8(const std::filesystem::path& path) {
 
 std::FILE* open_file(const std::string& utf8_path, const char* mode) {
 #ifdef _WIN32
-    return _wfopen(widen(utf8_path).c_str(), widen(mode).c_str());
+    if (std::string(mode) != "rb") return _wfopen(widen(utf8_path).c_str(), widen(mode).c_str());
+    // The C runtime's fopen shares read and write access only: a writer replacing the file would fail.
+    HANDLE handle = CreateFileW(widen(utf8_path).c_str(), GENERIC_READ, FILE_SHARE_READ | FILE_SHARE_WRITE | FILE_SHARE_DELETE,
+                                nullptr, OPEN_EXISTING, FILE_ATTRIBUTE_NORMAL, nullptr);
+    if (handle == INVALID_HANDLE_VALUE) {
+        const DWORD code = GetLastError();
+        errno = (code == ERROR_FILE_NOT_FOUND || code == ERROR_PATH_NOT_FOUND) ? ENOENT
+                : (code == ERROR_ACCESS_DENIED || code == ERROR_SHARING_VIOLATION) ? EACCES : EIO;
+        return nullptr;
+    }
+    const int descriptor = _open_osfhandle(reinterpret_cast<intptr_t>(handle), _O_RDONLY | _O_BINARY);
+    if (descriptor == -1) {
+        CloseHandle(handle);
+        return nullptr;
+    }
+    std::FILE* file = _fdopen(descriptor, "rb");
+    if (!file) _close(descriptor);
+    return file;
 #else
     return std::fopen(utf8_path.c_str(), mode);
+#endif
+}
+
+#ifdef _WIN32
+namespace {
+
+// Windows 10 1809+ on NTFS: a rename with POSIX semantics replaces a target that readers hold open while sharing
+// delete access (they keep the old file). Fails elsewhere (older systems, Wine: ERROR_INVALID_PARAMETER).
+bool rename_posix(const std::wstring& from, const std::wstring& to) {
+    HANDLE source = CreateFileW(from.c_str(), DELETE, FILE_SHARE_READ | FILE_SHARE_WRITE | FILE_SHARE_DELETE, nullptr,
+                                OPEN_EXISTING, FILE_ATTRIBUTE_NORMAL, nullptr);
+    if (source == INVALID_HANDLE_VALUE) return false;
+    const DWORD name_bytes = static_cast<DWORD>(to.size() * sizeof(wchar_t));
+    std::vector<unsigned char> buffer(sizeof(FILE_RENAME_INFO) + name_bytes);
+    auto* info = reinterpret_cast<FILE_RENAME_INFO*>(buffer.data());
+    // The first member is a BOOLEAN in old headers and a union with DWORD Flags in new ones: write the flags
+    // (FILE_RENAME_FLAG_REPLACE_IF_EXISTS | FILE_RENAME_FLAG_POSIX_SEMANTICS) as the DWORD they are.
+    const DWORD flags = 0x1 | 0x2;
+    std::memcpy(buffer.data(), &flags, sizeof flags);
+    info->RootDirectory = nullptr;
+    info->FileNameLength = name_bytes;
+    std::memcpy(info->FileName, to.data(), name_bytes);
+    const auto rename_info_ex = static_cast<FILE_INFO_BY_HANDLE_CLASS>(22);  // FileRenameInfoEx
+    const BOOL renamed = SetFileInformationByHandle(source, rename_info_ex, info, static_cast<DWORD>(buffer.size()));
+    const DWORD code = GetLastError();
+    CloseHandle(source);
+    SetLastError(code);
+    return renamed != 0;
+}
+
+// Classic semantics refuse to rename over an open file, but an open file whose readers share delete access may
+// itself be renamed: move it aside, move the new one in, and delete the old (gone when its last reader closes it).
+// For that instant the name is free: a reader opening it then finds no file (and tries again), never a partial one.
+bool rename_old_aside(const std::wstring& from, const std::wstring& to) {
+    const std::wstring aside = to + L".replaced-" + std::to_wstring(GetCurrentProcessId());
+    if (!MoveFileExW(to.c_str(), aside.c_str(), MOVEFILE_REPLACE_EXISTING)) return false;
+    if (!MoveFileExW(from.c_str(), to.c_str(), 0)) {
+        MoveFileExW(aside.c_str(), to.c_str(), 0);
+        return false;
+    }
+    DeleteFileW(aside.c_str());
+    return true;
+}
+
+}  // namespace
+#endif
+
+std::string replace_file(const std::string& utf8_from, const std::string& utf8_to) {
+#ifdef _WIN32
+    const std::wstring from = widen(utf8_from), to = widen(utf8_to);
+    for (int attempt = 0;; ++attempt) {
+        if (rename_posix(from, to) || MoveFileExW(from.c_str(), to.c_str(), MOVEFILE_REPLACE_EXISTING)) return {};
+        const DWORD code = GetLastError();
+        const bool held = code == ERROR_ACCESS_DENIED || code == ERROR_SHARING_VIOLATION;
+        if (held && rename_old_aside(from, to)) return {};
+        // A reader that does not share delete access (most programs' fopen): wait for it to let go, a while.
+        if (!held || attempt == 100) {
+            wchar_t* text = nullptr;
+            FormatMessageW(FORMAT_MESSAGE_ALLOCATE_BUFFER | FORMAT_MESSAGE_FROM_SYSTEM | FORMAT_MESSAGE_IGNORE_INSERTS,
+                           nullptr, code, 0, reinterpret_cast<wchar_t*>(&text), 0, nullptr);
+            std::string message = text ? narrow(text, static_cast<int>(wcslen(text))) : "error " + std::to_string(code);
+            if (text) LocalFree(text);
+            while (!message.empty() && (message.back() == '\n' || message.back() == '\r' || message.back() == ' ' ||
+                                        message.back() == '.'))
+                message.pop_back();
+            return held ? message + "; another program kept the file open for 5 seconds" : message;
+        }
+        Sleep(50);
+    }
+#else
+    if (std::rename(utf8_from.c_str(), utf8_to.c_str()) == 0) return {};
+    return std::strerror(errno);
 #endif
 }
 

@@ -14,8 +14,14 @@ namespace meniscus {
 std::filesystem::path path_from_utf8(const std::string& utf8);
 // The UTF-8 spelling of a filesystem path.
 std::string path_to_utf8(const std::filesystem::path& path);
-// std::fopen for a UTF-8 path (mode as for fopen); nullptr with errno set on failure.
+// std::fopen for a UTF-8 path (mode as for fopen); nullptr with errno set on failure. On Windows a file opened for
+// reading shares delete access, so that a writer can replace it meanwhile (replace_file), as POSIX always allows.
 std::FILE* open_file(const std::string& utf8_path, const char* mode);
+// Renames `from` over `to` (readers see the old file or the new one, never a mix). Windows refuses a plain rename
+// over a file another process has open: where its readers share delete access (the core's own), the old file is
+// replaced anyway (see platform.cpp); where one does not (most programs' fopen), the rename is tried again for up to
+// about 5 seconds, a reader's usual time. Returns an empty string, or why it failed.
+std::string replace_file(const std::string& utf8_from, const std::string& utf8_to);
 // Removes a file named by a UTF-8 path; false when it could not be removed.
 bool remove_file(const std::string& utf8_path);
 
