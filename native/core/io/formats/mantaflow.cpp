@@ -213,6 +213,8 @@ MantaflowConfig parse_mantaflow_config(const Source& source) {
     return m;
 }
 
+constexpr double kBlenderDefaultBandWidthCells = 3.0;
+
 FluidDomain fluid_domain_from_config(const MantaflowConfig& m, const std::string& config_path) {
     const auto& M = m.object_to_world;
     std::array<std::array<double, 3>, 3> unit_axis{};
@@ -233,6 +235,10 @@ FluidDomain fluid_domain_from_config(const MantaflowConfig& m, const std::string
     const double h = longest * m.dx;
     FluidDomain d;
     d.resolution = m.resolution;
+    // The cache does not record how deep the band of FLIP particles reaches: Blender's default Narrow Band Width (3
+    // cells) lets the narrow-band fill run on a cache read alone. A wider band (a whole liquid of particles) leaves no
+    // hollow for the fill to find, so assuming the default there adds nothing; the add-on passes the domain's value.
+    d.band_width_cells = kBlenderDefaultBandWidthCells;
     for (int r = 0; r < 3; ++r) d.origin[r] = M[12 + r];
     for (int i = 0; i < 3; ++i) {
         const double centre = 0.5 * (double(m.p0[i]) + m.p1[i]);
