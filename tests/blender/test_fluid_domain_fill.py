@@ -28,7 +28,9 @@ from _support import check  # noqa: E402
 
 BUILD = pathlib.Path(os.environ.get("MENISCUS_BUILD", _support.REPO / "build"))
 SCENES = ["pool"] if _support.AS_MODULE else ["pool", "open_top", "moving_obstacle"]
-FRAMES = [8, 12, 18, 24]  # the sphere lands at about 8; 12-18 splash; 24 settles
+# The sphere lands at about 8; 12-18 splash; 24 settles. MENISCUS_FILL_FRAMES=1-24 measures every frame (docs/addon.md).
+_first, _, _last = os.environ.get("MENISCUS_FILL_FRAMES", "").partition("-")
+FRAMES = range(int(_first), int(_last) + 1) if _last else [8, 12, 18, 24]
 TOLERANCE = 0.05
 if not all((BUILD / "mantaflow" / f"{scene}_UNI" / "scene.json").is_file() for scene in SCENES):
     subprocess.run(["bash", str(_support.REPO / "tests/mantaflow/bake.sh"), "/usr/bin/blender"], check=True,
@@ -78,16 +80,14 @@ def enclosed_volume(obj):
     return float(np.einsum("ij,ij->i", v[t[:, 0]], np.cross(v[t[:, 1]], v[t[:, 2]])).sum() / 6.0)
 
 
-MEASURED = {}  # scene -> [(frame, ours, Mantaflow's, seconds, added particles)]
-
-
 def surface_scene(name):
     scene, domain, baked = open_scene(name)
     domain.hide_render = True  # what artists do; the cache is read all the same
     bpy.context.view_layer.objects.active = domain
     check(bpy.ops.meniscus.add_fluid_domain_surface() == {"FINISHED"}, f"Surface From Fluid Domain refused {name}")
     surface = bpy.context.view_layer.objects.active
-    rows = []
+    obstacle = bpy.data.objects["Obstacle"]
+    rows, centres = [], {}
     for frame in FRAMES:
         del calls[:]
         started = time.perf_counter()
@@ -104,14 +104,17 @@ def surface_scene(name):
         check(added > 10000, f"{name} frame {frame}: the fill added {added} particles ({counts})")
         obstacles = domain_dict["obstacles"]
         check(len(obstacles) == 1 and len(obstacles[0]) == 12 * 9, f"{name}: obstacles {[len(o) for o in obstacles]}")
+        # Where the collision effector is at this frame: its 12 triangles' corners average to the box's centre.
+        centre, where = np.array(obstacles[0]).reshape(-1, 3).mean(axis=0), np.array(obstacle.matrix_world.translation)
+        check(np.allclose(centre, where, atol=1e-4), f"{name} frame {frame}: obstacle at {centre}, effector at {where}")
+        centres[frame] = where
         ours, theirs = enclosed_volume(surface), baked["mantaflow_mesh_volume"][str(frame)]
         rows.append((frame, ours, theirs, seconds, added))
-    MEASURED[name] = rows
     print(f"{name}: " + ", ".join(f"frame {f} {o:.3f}/{t:.3f} m3 = {o / t:.3f} ({s:.2f} s, {a} added)"
                                   for f, o, t, s, a in rows))
     ratios = {f: round(o / t, 3) for f, o, t, _, _ in rows}
     check(all(abs(r - 1.0) <= TOLERANCE for r in ratios.values()), f"{name}: ours / Mantaflow's {ratios}")
-    return scene, domain, surface, baked
+    return baked, centres
 
 
 def test_pool_is_solid_water_within_5_percent_of_mantaflow():
@@ -120,24 +123,17 @@ def test_pool_is_solid_water_within_5_percent_of_mantaflow():
 
 if "open_top" in SCENES:
     def test_open_top_is_solid_water_with_its_top_border_open():
-        _, _, _, baked = surface_scene("open_top")
+        baked, _ = surface_scene("open_top")
         check(baked["open_top"], "the open_top scene should have its top border open")
         check(calls[-1][0]["fluid_domain"]["closed_borders"] == [True] * 5 + [False],
               calls[-1][0]["fluid_domain"]["closed_borders"])
 
 if "moving_obstacle" in SCENES:
     def test_moving_obstacle_is_passed_where_it_is_at_each_frame():
-        scene, _, _, _ = surface_scene("moving_obstacle")
-        obstacle = bpy.data.objects["Obstacle"]
-        centres = []
-        for frame in (3, 21):  # not among FRAMES: reconstructed afresh
-            del calls[:]
-            scene.frame_set(frame)
-            check(len(calls) == 1, f"frame {frame}: {len(calls)} reconstructions")
-            corners = np.array(calls[0][0]["fluid_domain"]["obstacles"][0]).reshape(-1, 3)
-            where = np.array(obstacle.matrix_world.translation)
-            check(np.allclose(corners.mean(axis=0), where, atol=1e-4), (frame, corners.mean(axis=0), where))
-            centres.append(where)
-        check(np.linalg.norm(centres[1] - centres[0]) > 0.5, f"the obstacle did not move: {centres}")
+        _, centres = surface_scene("moving_obstacle")
+        # Keyed from (0.6, -0.5) at frame 1 to (-0.6, 0.5) at the last: passed where it is, not where it started.
+        first, last = centres[min(centres)], centres[max(centres)]
+        check(np.linalg.norm(last - first) > 0.5, f"the obstacle did not move: {centres}")
+
 
 _support.run(globals(), cleanup=addon.unregister)
