@@ -5,7 +5,6 @@ included) on the left, Mantaflow's mesh of the same frame on the right, on a flo
     blender -b --factory-startup --python-exit-code 1 --python docs/render_fluid_domain.py -- --addon-path build/addon \
         [--scene pool] [--frame 12] [--output docs/images/fluid_domain_pool.png]
 """
-import argparse
 import pathlib
 import shutil
 import sys
@@ -14,17 +13,10 @@ import tempfile
 import bpy
 import numpy as np
 
-argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-parser = argparse.ArgumentParser()
-parser.add_argument("--addon-path", default="build/addon")
-parser.add_argument("--bakes", default="build/mantaflow")
-parser.add_argument("--scene", default="pool")
-parser.add_argument("--frame", type=int, default=12)
-parser.add_argument("--output", default=None)
-parser.add_argument("--samples", type=int, default=16)
-args = parser.parse_args(argv)
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import render_scene  # noqa: E402
+
+args = render_scene.mantaflow_figure_arguments()
 
 meniscus, mesh_update = render_scene.library(args.addon_path)
 meniscus.register()  # the add-on folder's own registration, as Blender enables it
@@ -45,11 +37,7 @@ ours = surface.data.copy()  # kept when the scene is emptied below
 theirs = meniscus.read_mesh(copy / "cache" / f"mesh/fluid_mesh_{args.frame:04d}.bobj.gz")
 
 scene = render_scene.cycles_scene(args.samples, 960, 400)
-water = bpy.data.materials.new("water")
-water.use_nodes = True
-bsdf = water.node_tree.nodes["Principled BSDF"]
-bsdf.inputs["Base Color"].default_value = (0.55, 0.65, 0.8, 1.0)
-bsdf.inputs["Roughness"].default_value = 0.2
+water = render_scene.water_material()
 mantaflow = bpy.data.meshes.new("Mantaflow")
 mesh_update.write_surface(mantaflow, np.asarray(theirs.vertices, dtype=np.float32),
                           np.asarray(theirs.triangles, dtype=np.int32), theirs.normals)
