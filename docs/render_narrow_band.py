@@ -5,24 +5,16 @@ from below the floor, where a hollow band shows.
     blender -b --factory-startup --python-exit-code 1 --python docs/render_narrow_band.py -- --addon-path build/addon \
         [--scene pool] [--frame 12] [--output docs/images/narrow_band_pool.png]
 """
-import argparse
 import pathlib
 import sys
 
 import bpy
 import numpy as np
 
-argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-parser = argparse.ArgumentParser()
-parser.add_argument("--addon-path", default="build/addon")
-parser.add_argument("--bakes", default="build/mantaflow")
-parser.add_argument("--scene", default="pool")
-parser.add_argument("--frame", type=int, default=12)
-parser.add_argument("--output", default=None)
-parser.add_argument("--samples", type=int, default=16)
-args = parser.parse_args(argv)
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import render_scene  # noqa: E402
+
+args = render_scene.mantaflow_figure_arguments()
 
 meniscus, mesh_update = render_scene.library(args.addon_path)
 
@@ -36,11 +28,7 @@ surfaces = [("band alone", meniscus.reconstruct(particles.positions, cell / 2, f
             ("Mantaflow", meniscus.read_mesh(cache / f"mesh/fluid_mesh_{args.frame:04d}.bobj.gz"))]
 
 scene = render_scene.cycles_scene(args.samples, 1080, 330)
-water = bpy.data.materials.new("water")
-water.use_nodes = True
-bsdf = water.node_tree.nodes["Principled BSDF"]
-bsdf.inputs["Base Color"].default_value = (0.55, 0.65, 0.8, 1.0)
-bsdf.inputs["Roughness"].default_value = 0.2
+water = render_scene.water_material()
 
 for index, (name, mesh) in enumerate(surfaces):
     data = bpy.data.meshes.new(name)

@@ -1,5 +1,7 @@
-"""What the README's Cycles figures share (docs/render_figures.py, docs/render_container.py): the library from the
-add-on folder, an emptied scene with Cycles and a light grey sky, a camera aimed at a point, a sun."""
+"""What the README's Cycles figures share (docs/render_figures.py, docs/render_container.py, and from a Mantaflow
+cache docs/render_narrow_band.py, docs/render_fluid_domain.py): the library from the add-on folder, an emptied scene
+with Cycles and a light grey sky, a camera aimed at a point, a sun, a water material."""
+import argparse
 import math
 import pathlib
 import sys
@@ -53,3 +55,26 @@ def add_sun(scene, rotation_degrees, energy=4.0):
     sun.rotation_euler = tuple(math.radians(angle) for angle in rotation_degrees)
     scene.collection.objects.link(sun)
     return sun
+
+
+def mantaflow_figure_arguments():
+    """The command line of the figures made from a Mantaflow cache of tests/mantaflow/bake.sh (render_narrow_band.py,
+    render_fluid_domain.py): the arguments after Blender's '--'."""
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--addon-path", default="build/addon")
+    parser.add_argument("--bakes", default="build/mantaflow")
+    parser.add_argument("--scene", default="pool")
+    parser.add_argument("--frame", type=int, default=12)
+    parser.add_argument("--output", default=None)
+    parser.add_argument("--samples", type=int, default=16)
+    return parser.parse_args(argv)
+
+
+def water_material():
+    water = bpy.data.materials.new("water")
+    water.use_nodes = True
+    bsdf = water.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (0.55, 0.65, 0.8, 1.0)
+    bsdf.inputs["Roughness"].default_value = 0.2
+    return water

@@ -154,6 +154,34 @@ def render_in_new_process(blend, first, last=None, report=None, timeout=180, env
                           env=dict(os.environ, **(environment or {})))
 
 
+def rebuilt_pool_domain(folder, frames, resolution):
+    """The baked pool's liquid domain and obstacle (tests/mantaflow/bake_scene.py) rebuilt in a new scene saved in
+    folder, its cache folder '//cache': the PyPI bpy modules cannot load Mantaflow caches, the add-on reads the files
+    on its own. Returns (scene, domain)."""
+    clear_scene()
+    scene = bpy.context.scene
+    bpy.ops.wm.save_as_mainfile(filepath=str(pathlib.Path(folder) / "module_scene.blend"))  # '//' resolves here
+    scene.frame_start, scene.frame_end = 1, frames
+    bpy.ops.mesh.primitive_cube_add(size=2, location=(0, 0, 0.75))
+    domain = bpy.context.active_object
+    domain.name, domain.scale = "Liquid Domain", (1, 1, 0.75)
+    bpy.ops.mesh.primitive_cube_add(size=0.4, location=(0.5, 0.3, 0.25))
+    obstacle = bpy.context.active_object
+    obstacle.name = "Obstacle"
+    obstacle.modifiers.new("Fluid", "FLUID").fluid_type = "EFFECTOR"
+    modifier = domain.modifiers.new("Fluid", "FLUID")
+    # The module's Mantaflow fails on any evaluation of a domain (and may abort the process): the add-on reads the
+    # settings and the files, so the modifier may stay off.
+    modifier.show_viewport = modifier.show_render = False
+    modifier.fluid_type = "DOMAIN"
+    settings = modifier.domain_settings
+    settings.domain_type = "LIQUID"
+    settings.cache_data_format, settings.cache_type = "UNI", "ALL"  # as baked (new 4.x domains: OpenVDB, Replay)
+    settings.resolution_max = resolution
+    settings.cache_frame_start, settings.cache_frame_end = 1, frames
+    settings.cache_directory = "//cache"  # last: editing cache settings makes Blender delete the folder's files
+    return scene, domain
+
 def mesh_counts(obj):
     return len(obj.data.vertices), len(obj.data.polygons)
 

@@ -49,29 +49,7 @@ def open_domain_scene():
     if not _support.AS_MODULE:
         bpy.ops.wm.open_mainfile(filepath=str(COPY / "scene.blend"))
         return bpy.context.scene, bpy.data.objects["Liquid Domain"]
-    _support.clear_scene()
-    scene = bpy.context.scene
-    bpy.ops.wm.save_as_mainfile(filepath=str(COPY / "module_scene.blend"))  # '//' resolves next to the copy
-    scene.frame_start, scene.frame_end = 1, SCENE["frames"]
-    bpy.ops.mesh.primitive_cube_add(size=2, location=(0, 0, 0.75))
-    domain = bpy.context.active_object
-    domain.name, domain.scale = "Liquid Domain", (1, 1, 0.75)
-    bpy.ops.mesh.primitive_cube_add(size=0.4, location=(0.5, 0.3, 0.25))
-    obstacle = bpy.context.active_object
-    obstacle.name = "Obstacle"
-    obstacle.modifiers.new("Fluid", "FLUID").fluid_type = "EFFECTOR"
-    modifier = domain.modifiers.new("Fluid", "FLUID")
-    # The module's Mantaflow fails on any evaluation of a domain (and may abort the process): the add-on reads the
-    # settings and the files, so the modifier may stay off.
-    modifier.show_viewport = modifier.show_render = False
-    modifier.fluid_type = "DOMAIN"
-    settings = modifier.domain_settings
-    settings.domain_type = "LIQUID"
-    settings.cache_data_format, settings.cache_type = "UNI", "ALL"  # as baked (new 4.x domains: OpenVDB, Replay)
-    settings.resolution_max = SCENE["resolution_max"]
-    settings.cache_frame_start, settings.cache_frame_end = 1, SCENE["frames"]
-    settings.cache_directory = "//cache"  # last: editing cache settings makes Blender delete the folder's files
-    return scene, domain
+    return _support.rebuilt_pool_domain(COPY, SCENE["frames"], SCENE["resolution_max"])
 
 
 scene, domain = open_domain_scene()
