@@ -180,7 +180,9 @@ TEST_CASE("Mantaflow files that cannot be placed or read are refused with the fi
 
     const Bytes whole = config();
     cache.write(cache.config_dir, "config_0003.uni", Bytes(whole.begin(), whole.begin() + 150));
-    require_particle_error(pp, "its cache config cannot be read: " + cache.config_dir + "/config_0003.uni: a Mantaflow cache config holds 204 bytes, this one 150");
+    // The reader joins the config's path with the platform's separator ('\\' on Windows).
+    const std::string config_path = (fs::path(cache.config_dir) / "config_0003.uni").string();
+    require_particle_error(pp, "its cache config cannot be read: " + config_path + ": a Mantaflow cache config holds 204 bytes, this one 150");
     Bytes flat = config(0.0f);
     cache.write(cache.config_dir, "config_0003.uni", flat);
     require_particle_error(pp, "zero scale on axis 2");
