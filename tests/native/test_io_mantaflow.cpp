@@ -197,7 +197,8 @@ TEST_CASE("Mantaflow files that cannot be placed or read are refused with the fi
 
     cache.write(cache.data, "pVel_0003.uni", vec3_data({{1, 0, 0}}));
     require_particle_error(cache.data + "/pVel_0003.uni", "holds no positions: read the frame's particle file pp_####.uni");
-    require_particle_error(pp, "its velocities cannot be read: " + cache.data + "/pVel_0003.uni: holds 1 values on a 16 x 16 x 8 grid, but its particle file has 2");
+    const std::string velocity_path = (fs::path(cache.data) / "pVel_0003.uni").string();
+    require_particle_error(pp, "its velocities cannot be read: " + velocity_path + ": holds 1 values on a 16 x 16 x 8 grid, but its particle file has 2");
 
     Bytes system = particle_system({{1, 2, 3, 0}, {4, 5, 6, 0}});
     cache.write(cache.data, "pVel_0003.uni", vec3_data({{1, 0, 0}, {0, 1, 0}}));
