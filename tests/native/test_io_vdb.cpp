@@ -179,7 +179,9 @@ void node_values(VdbWriter& w, std::size_t count, std::uint32_t compression) {
     w.bytes(zeros);
 }
 
-Bytes make_vdb(std::uint32_t compression, const std::vector<std::uint32_t>& voxel_of_point, const std::vector<VdbAttribute>& attributes) {
+// with_leaf false: a tree without leaves (a root with no children) that still declares the attributes' passes.
+Bytes make_vdb(std::uint32_t compression, const std::vector<std::uint32_t>& voxel_of_point, const std::vector<VdbAttribute>& attributes,
+               bool with_leaf = true) {
     VdbWriter w;
     w.u64(0x56444220), w.u32(224), w.u32(10), w.u32(0), w.u8(1);
     w.bytes(as_bytes("00000000-0000-0000-0000-000000000000"));
@@ -192,36 +194,40 @@ Bytes make_vdb(std::uint32_t compression, const std::vector<std::uint32_t>& voxe
     w.str("UniformScaleTranslateMap");
     for (double t : {10.0, 20.0, 30.0}) w.f64(t);
     for (int k = 0; k < 15; ++k) w.f64(0.5);  // scale (then the derived values, not used)
-    w.u32(1), w.u32(0), w.u32(0), w.u32(1);  // one buffer, background, no tiles, one child
-    w.u32(0), w.u32(0), w.u32(0);
-    Bytes mask5(4096, 0), mask4(512, 0);
-    mask5[0] = 1;  // child 0 of the 32^3 node: origin + 0
-    mask4[(1 * 256 + 2 * 16) / 8] = 1 << ((1 * 256 + 2 * 16) % 8);  // child (1, 2, 0) of the 16^3 node: (8, 16, 0)
-    w.bytes(mask5), w.bytes(Bytes(4096, 0)), node_values(w, 32768, compression);
-    w.bytes(mask4), w.bytes(Bytes(512, 0)), node_values(w, 4096, compression);
-    w.bytes(Bytes(64, 0xff));  // the leaf's value mask
+    w.u32(1), w.u32(0), w.u32(0), w.u32(with_leaf ? 1 : 0);  // one buffer, background, no tiles, one child (or none)
+    if (with_leaf) {
+        w.u32(0), w.u32(0), w.u32(0);
+        Bytes mask5(4096, 0), mask4(512, 0);
+        mask5[0] = 1;  // child 0 of the 32^3 node: origin + 0
+        mask4[(1 * 256 + 2 * 16) / 8] = 1 << ((1 * 256 + 2 * 16) % 8);  // child (1, 2, 0) of the 16^3 node: (8, 16, 0)
+        w.bytes(mask5), w.bytes(Bytes(4096, 0)), node_values(w, 32768, compression);
+        w.bytes(mask4), w.bytes(Bytes(512, 0)), node_values(w, 4096, compression);
+        w.bytes(Bytes(64, 0xff));  // the leaf's value mask
+    }
     const std::size_t block_pos = w.b.size();
     const bool paged = compression == 4;
     w.u16(static_cast<unsigned>(4 + 2 * attributes.size()));
-    w.u16(0xffff);
-    w.u8(1), w.u64(attributes.size());
-    for (const auto& a : attributes) w.str(a.type), w.str(a.codec);
-    for (std::size_t k = 0; k < attributes.size(); ++k) w.str(attributes[k].name), w.u64(k);
-    w.u64(0), w.u32(0);  // no groups, no metadata
-    for (const auto& a : attributes) {
-        w.u64(6 + a.values.size()), w.u8(0), w.u8((a.uniform ? 2 : 0) | (paged ? 8 : 0));
-        w.u32(static_cast<std::uint32_t>(a.uniform ? 1 : voxel_of_point.size()));
-    }
-    if (paged)
-        for (const auto& a : attributes) w.u32(static_cast<std::uint32_t>(-static_cast<std::int32_t>(a.values.size())));  // stored pages
-    w.bytes(Bytes(64, 0xff)), w.u16(0xffff);
-    for (std::uint32_t v = 0, p = 0; v < 512; ++v) {
-        while (p < voxel_of_point.size() && voxel_of_point[p] == v) ++p;
-        w.u32(p);
-    }
-    for (const auto& a : attributes) {
-        if (!paged && !a.uniform) w.u8(0);
-        w.bytes(a.values);
+    if (with_leaf) {
+        w.u16(0xffff);
+        w.u8(1), w.u64(attributes.size());
+        for (const auto& a : attributes) w.str(a.type), w.str(a.codec);
+        for (std::size_t k = 0; k < attributes.size(); ++k) w.str(attributes[k].name), w.u64(k);
+        w.u64(0), w.u32(0);  // no groups, no metadata
+        for (const auto& a : attributes) {
+            w.u64(6 + a.values.size()), w.u8(0), w.u8((a.uniform ? 2 : 0) | (paged ? 8 : 0));
+            w.u32(static_cast<std::uint32_t>(a.uniform ? 1 : voxel_of_point.size()));
+        }
+        if (paged)
+            for (const auto& a : attributes) w.u32(static_cast<std::uint32_t>(-static_cast<std::int32_t>(a.values.size())));  // stored pages
+        w.bytes(Bytes(64, 0xff)), w.u16(0xffff);
+        for (std::uint32_t v = 0, p = 0; v < 512; ++v) {
+            while (p < voxel_of_point.size() && voxel_of_point[p] == v) ++p;
+            w.u32(p);
+        }
+        for (const auto& a : attributes) {
+            if (!paged && !a.uniform) w.u8(0);
+            w.bytes(a.values);
+        }
     }
     const std::size_t end_pos = w.b.size();
     for (int k = 0; k < 8; ++k) {
@@ -287,4 +293,9 @@ TEST_CASE("OpenVDB points: compression, codecs, uniform arrays and transforms", 
     require_particle_error(path, "has no position attribute 'P'");
     write_bytes(path, make_vdb(0, {0, 0}, {{"P", "vec3s", "null", stored(offsets)}}));
     require_particle_error(path, "36 bytes for 2 values of 12 bytes");
+
+    // A tree without leaves declares passes for attributes it never describes: no points (this read the empty list of
+    // attribute descriptions out of bounds).
+    write_bytes(path, make_vdb(0, {}, {{"P", "vec3s", "null", {}}, {"id", "int32", "null", {}}}, false));
+    CHECK(read_particles(path).size() == 0);
 }

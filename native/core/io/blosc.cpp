@@ -99,6 +99,8 @@ void blosc_decompress(const std::string& path, const unsigned char* in, std::siz
                       std::size_t expected, const std::string& what) {
     auto bad = [&](const std::string& why) { fail(path, what + ": corrupt Blosc data: " + why); };
     if (size < 16) bad("a " + std::to_string(size) + "-byte frame is shorter than its 16-byte header");
+    // Blosc 1 writes format versions 1-2; Blosc2 chunks (3 and up) lay their header out otherwise.
+    if (in[0] > 2) fail(path, what + ": Blosc format version " + std::to_string(in[0]) + " (Blosc2) is not supported");
     const unsigned flags = in[2];
     const std::size_t type_size = in[3] == 0 ? 1 : in[3];
     const std::size_t nbytes = load_le32(in + 4), block_size = load_le32(in + 8), cbytes = load_le32(in + 12);

@@ -558,8 +558,8 @@ InteriorFill fill_interior(const PositionsView& positions, const FluidDomain& do
                                 for (int di = -1; di <= 1; ++di) {
                                     const int i = c[0] + di, j = c[1] + dj, k = c[2] + dk;
                                     if (i < 0 || j < 0 || k < 0 || i >= grid.n[0] || j >= grid.n[1] || k >= grid.n[2]) continue;
-                                    const int64_t near = grid.index(i, j, k);
-                                    for (uint32_t s = cell_start[near]; s < cell_start[near + 1]; ++s) {
+                                    const int64_t nearby = grid.index(i, j, k);  // not 'near': a macro in <windows.h>
+                                    for (uint32_t s = cell_start[nearby]; s < cell_start[nearby + 1]; ++s) {
                                         const uint32_t p = by_cell[s];
                                         double d2 = 0.0;
                                         for (int a = 0; a < 3; ++a) {

@@ -24,6 +24,7 @@ constexpr std::uint32_t kCompressZip = 0x1, kCompressActiveMask = 0x2, kCompress
 constexpr std::uint32_t kMinVersion = 222;       // node mask compression (OpenVDB 3.0, 2014)
 constexpr std::uint32_t kMultiPassVersion = 224;  // point data grids
 constexpr std::size_t kLeafVoxels = 512;
+constexpr std::uint32_t kMaxStride = 1u << 16;  // values per point of one array: far above any attribute OpenVDB writes
 
 float half_to_float(std::uint16_t h) {
     const std::uint32_t sign = std::uint32_t(h & 0x8000u) << 16;
@@ -313,7 +314,8 @@ ParticleData VdbReader::read_point_grid(const std::string& name, std::uint64_t b
     // Buffers, pass by pass over all leaves (OpenVDB's PointDataLeafNode::readBuffers).
     const std::size_t passes_at = c_.pos();
     const unsigned passes = load_le16(c_.take(2, "the pass count"));
-    if (passes == 0 && leaves.empty()) return ParticleData{};  // an empty grid (no liquid yet) writes no passes
+    // An empty grid (no liquid yet) writes no passes; without leaves no descriptor is read, whatever the passes say.
+    if (leaves.empty()) return ParticleData{};
     if (passes < 4 || passes % 2 != 0) c_.fail(grid + ": pass count " + std::to_string(passes) + " at " + c_.where(passes_at) + " is not 4 + 2 per attribute");
     const std::size_t attributes = (passes - 4) / 2;
     for (Leaf& leaf : leaves) leaf.voxel_bytes = load_le16(c_.take(2, "a leaf's voxel buffer size"));
@@ -368,6 +370,10 @@ ParticleData VdbReader::read_point_grid(const std::string& name, std::uint64_t b
                 c_.fail(grid + ": attribute " + quote(descriptor[a].name) + " of leaf " + std::to_string(l) + " at " + c_.where(header_at) +
                         " has flags " + std::to_string(flags) + "/" + std::to_string(serialization) + " and " + std::to_string(h.bytes) +
                         " bytes, which OpenVDB does not write");
+            // Values are read with leaf 0's stride: another stride in a later leaf would read past its data.
+            if (h.stride > kMaxStride || (l > 0 && h.stride != headers[0][a].stride))
+                c_.fail(grid + ": attribute " + quote(descriptor[a].name) + " of leaf " + std::to_string(l) + " at " + c_.where(header_at) +
+                        " has stride " + std::to_string(h.stride) + (l > 0 ? " where leaf 0 has " + std::to_string(headers[0][a].stride) : std::string()));
             h.bytes -= 6;
             h.uniform = serialization & 2;
             h.paged = serialization & 8;
@@ -459,7 +465,12 @@ ParticleData VdbReader::read_point_grid(const std::string& name, std::uint64_t b
         attr.name = descriptor[a].name;
         attr.components = storage[a].components * static_cast<int>(headers.empty() ? 1 : headers[0][a].stride);
         attr.integral = storage[a].integral;
-        attr.values.reserve(std::size_t(attr.components) * total);
+        // A uniform attribute stores one value for every point: bound what it expands to as the positions are bounded.
+        std::uint64_t floats = 0;
+        if (!checked_mul(total, static_cast<std::uint64_t>(attr.components), floats) || floats > c_.size() * kGunzipRatioCap + kGunzipSlackBytes)
+            c_.fail(grid + ": attribute " + quote(attr.name) + " of " + std::to_string(attr.components) + " values for each of " +
+                    std::to_string(total) + " points cannot come from a file of this size");
+        attr.values.reserve(static_cast<std::size_t>(floats));
         out.attributes.push_back(std::move(attr));
     }
     for (std::size_t a = 0; a < attributes; ++a) {
@@ -492,8 +503,8 @@ ParticleData VdbReader::read_point_grid(const std::string& name, std::uint64_t b
                 const unsigned char* in = c_.take(h.bytes, "an attribute array");
                 if (compressed) {
                     std::uint64_t expected = 0;
-                    checked_mul(h.uniform ? 1 : h.size, h.stride * storage[a].bytes * storage[a].components, expected);
-                    if (!keep[a] || expected > max_inflated_size(h.bytes)) c_.fail(what + ": a compressed array that cannot be sized");
+                    const bool sized = checked_mul(h.uniform ? 1 : h.size, std::uint64_t(h.stride) * storage[a].bytes * storage[a].components, expected);
+                    if (!sized || !keep[a] || expected > max_inflated_size(h.bytes)) c_.fail(what + ": a compressed array that cannot be sized");
                     unpaged.resize(static_cast<std::size_t>(expected));
                     blosc_decompress(c_.source().path, in, h.bytes, unpaged.data(), unpaged.size(), what);
                     data = unpaged.data();
@@ -503,9 +514,9 @@ ParticleData VdbReader::read_point_grid(const std::string& name, std::uint64_t b
             }
             if (keep[a]) {
                 const Storage& s = storage[a];
-                const std::size_t value_bytes = s.bytes * s.components * h.stride;
-                const std::size_t stored_bytes = (h.uniform ? 1 : std::size_t(h.size)) * value_bytes;
-                if (unpaged.empty() && stored_bytes != h.bytes)
+                const std::size_t value_bytes = s.bytes * s.components * h.stride;  // small: the stride is bounded
+                std::uint64_t stored_bytes = 0;
+                if (!checked_mul(h.uniform ? 1 : std::uint64_t(h.size), value_bytes, stored_bytes) || (unpaged.empty() && stored_bytes != h.bytes))
                     c_.fail(what + ": " + std::to_string(h.bytes) + " bytes for " + std::to_string(h.uniform ? 1 : h.size) +
                             " values of " + std::to_string(value_bytes) + " bytes");
                 for (std::size_t v = 0, p = 0; v < kLeafVoxels; ++v) {
@@ -570,6 +581,8 @@ ParticleData VdbReader::read() {
             if (type != "Tree_ptdataidx32_5_4_3") c_.fail("point grid " + quote(name) + " has the tree layout " + quote(type) + " (5_4_3 is supported)");
             c_.seek(static_cast<std::size_t>(grid_pos));
             point_grids.push_back(read_point_grid(name, static_cast<std::uint64_t>(block_pos)));
+            if (c_.pos() > static_cast<std::size_t>(end_pos))  // overlapping grids would be read again
+                c_.fail("point grid " + quote(name) + " runs to byte " + std::to_string(c_.pos()) + ", past its end at byte " + std::to_string(end_pos));
         } else {
             other.push_back(name + " (" + type + ")");
         }
