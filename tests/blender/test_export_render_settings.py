@@ -19,7 +19,8 @@ addon = _support.enable_addon()
 cache = addon.cache
 native_cache, update, app_handlers = _support.addon_modules(addon, "blender.native_cache", "blender.update",
                                                            "blender.app_handlers")
-_temporary = tempfile.TemporaryDirectory(prefix="meniscus_export_render_")
+# ignore_cleanup_errors: on Windows Blender still holds the played .abc open at the end.
+_temporary = tempfile.TemporaryDirectory(prefix="meniscus_export_render_", ignore_cleanup_errors=True)
 FILES, BROKEN = _support.failing_sequence(_temporary.name)  # 30 missing, 31 truncated
 
 _support.clear_scene()
@@ -143,28 +144,33 @@ def test_empty_exports_empty_frames_and_lists_them():
 
 
 def test_reexport_over_the_played_file():
-    """Exporting again over the file the surface plays: the cache file data-block left reading it is released first
-    (Windows cannot replace a file Blender holds open), and where the file still cannot be replaced the export fails
-    saying so, removes its partial file and plays the earlier one again."""
+    """Exporting again over the file the surface plays: the cache file data-block left reading it is released first;
+    where the file cannot be renamed over (Windows, while Blender still holds it open) the finished export is written
+    over it in place; where it cannot be written either, the export fails saying so, removes its partial file and plays
+    the earlier one again."""
     if refuses_without_alembic():
         return
     export_with("EMPTY", 28, 29)
     earlier = os.path.getsize(ABC), evaluated_counts(28)
     settings.render_failure = "EMPTY"
-    replace = native_cache.os.replace
+    replace, copyfile = native_cache.os.replace, native_cache.shutil.copyfile
 
     def refused(*_args):  # what Windows says while another process holds the file open
         raise PermissionError(13, "Permission denied")
 
     native_cache.os.replace = refused
     try:
+        result = native_cache.export_alembic(surface, scene, 28, 29, ABC)  # written over in place
+        check(result.path == ABC and native_cache.playing_file(surface) == ABC, result)
+        check(sorted(os.listdir(os.path.dirname(ABC))) == [os.path.basename(ABC)], os.listdir(os.path.dirname(ABC)))
+        native_cache.shutil.copyfile = refused
         native_cache.export_alembic(surface, scene, 28, 29, ABC)
     except native_cache.NativeCacheError as error:
         message = str(error)
     else:
         raise AssertionError("the export did not fail")
     finally:
-        native_cache.os.replace = replace
+        native_cache.os.replace, native_cache.shutil.copyfile = replace, copyfile
     check(f"{ABC} cannot be replaced (Permission denied)" in message, message)
     check(sorted(os.listdir(os.path.dirname(ABC))) == [os.path.basename(ABC)], os.listdir(os.path.dirname(ABC)))
     check(native_cache.playing_file(surface) == ABC and (os.path.getsize(ABC), evaluated_counts(28)) == earlier,

@@ -15,6 +15,7 @@ with and without the add-on is the same file.
 """
 import collections
 import os
+import shutil
 
 import bpy
 
@@ -139,7 +140,7 @@ def export_alembic(obj, scene, frame_start, frame_end, filepath=None):
         # Blender keeps an archive open while a cache file data-block reads it (the modifier removed above left
         # one): on Windows the file could not be replaced.
         _release_cache_files(filepath)
-        os.replace(writing, filepath)
+        _move_into_place(writing, filepath)
     except OSError as error:
         _abandon(obj, writing, previous)
         raise NativeCacheError(f"Not exported: {filepath} cannot be replaced ({error.strerror or error}); close "
@@ -149,6 +150,17 @@ def export_alembic(obj, scene, frame_start, frame_end, filepath=None):
     cube_size = obj.meniscus.render_cube_size if from_particles or not record.from_cache else None
     return ExportResult(filepath, frame_end - frame_start + 1, cube_size, len(record.from_cache),
                         dict(record.failed))
+
+
+def _move_into_place(writing, filepath):
+    """Replaces filepath by the finished export. Windows refuses to rename over a file that a reader opened without
+    delete sharing, and Blender keeps a played archive open a while after its data-block is gone: the finished file's
+    contents are then written over the old one in place, as the exporter itself would write it."""
+    try:
+        os.replace(writing, filepath)
+    except PermissionError:
+        shutil.copyfile(writing, filepath)
+        os.remove(writing)
 
 
 def _abandon(obj, writing, previous):
