@@ -49,6 +49,8 @@ def held():
 
 
 def resident_megabytes():
+    if not hasattr(os, "sysconf"):  # Windows (also under Wine, where /proc of the host can be read)
+        return float("nan")
     try:
         with open("/proc/self/statm") as statm:
             return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2 ** 20
