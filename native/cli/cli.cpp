@@ -22,20 +22,16 @@
 #include <mutex>
 #include <optional>
 #include <regex>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
-
-#ifdef _WIN32
-#include <process.h>
-#else
-#include <unistd.h>
-#endif
 
 #include "base/errors.h"
 #include "io/frame_pattern.h"
 #include "io/io.h"
 #include "io/io_util.h"
+#include "io/partial_files.h"
 #include "io/provenance.h"
 #include "base/memory.h"
 #include "parameters_file.h"
@@ -276,14 +272,6 @@ void add_parameter_flags(CLI::App& command, Parameters& parameters) {
     }
 }
 
-long process_id() {
-#ifdef _WIN32
-    return static_cast<long>(_getpid());
-#else
-    return static_cast<long>(getpid());
-#endif
-}
-
 // Writes a mesh under a temporary name in the output's folder, then renames it: a process killed mid-write (a
 // preempted farm task) leaves no partial file under the output name, so an existing output is a complete one. The
 // temporary name keeps the extension (it chooses the format) and holds the process id (two runs of one frame, as
@@ -291,7 +279,7 @@ long process_id() {
 // is removed before the mesh is replaced and written after it: an output never sits beside another run's record.
 void write_mesh_completely(const TriMesh& mesh, const std::string& output, int threads, const std::string& provenance = "") {
     const fs::path target = path_from_utf8(output);
-    const fs::path partial = target.parent_path() / path_from_utf8(".partial-" + std::to_string(process_id()) + "-" +
+    const fs::path partial = target.parent_path() / path_from_utf8(".partial-" + std::to_string(current_process_id()) + "-" +
                                                                     path_to_utf8(target.filename()));
     std::error_code error;
     if (!target.parent_path().empty()) fs::create_directories(target.parent_path(), error);  // a farm's fresh output folder
@@ -536,6 +524,18 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
 
     Progress progress(jobs.size(), !args.quiet && is_terminal(stderr));
     for (const std::string& duplicate : duplicates) progress.message("warning: " + duplicate);
+    // Runs killed mid-write (preempted farm tasks) left their temporary files in the output folders: one pass each.
+    std::set<std::string> output_folders;
+    for (const FrameJob& job : jobs)
+        for (const std::string* output : {&job.output, &job.raw_output})
+            if (!output->empty()) output_folders.insert(path_to_utf8(path_from_utf8(*output).parent_path()));
+    for (const std::string& folder : output_folders) {
+        const std::vector<std::string> removed = remove_abandoned_partials(folder.empty() ? "." : folder);
+        if (!removed.empty())
+            progress.message("removed " + std::to_string(removed.size()) + " temporary file" + (removed.size() == 1 ? "" : "s") +
+                             " of killed runs in " + (folder.empty() ? "." : folder) + " (" + removed.front() +
+                             (removed.size() > 1 ? ", ..." : "") + ")");
+    }
     if (args.double_precision)
         progress.message("note: -d/--double-precision has no effect in Meniscus: in splashsurf itself, double precision moves "
                          "vertices by at most 0.4 % of a cube (median 0.001 %) and gives the same triangles (README, Command line)");

@@ -18,6 +18,7 @@
 #include "io/frame_pattern.h"
 #include "io/io.h"
 #include "parameters.h"
+#include "io/partial_files.h"
 #include "io/provenance.h"
 #include "parameters_file.h"
 #include "pipeline.h"
@@ -442,6 +443,12 @@ PYBIND11_MODULE(_core, m) {
     m.def("forget_provenance", &forget_provenance, py::arg("mesh_path"), "Removes a mesh file's provenance record.");
     m.def("write_provenance", &write_provenance, py::arg("mesh_path"), py::arg("record"),
           "Writes a mesh file's provenance record (atomically).");
+    // Writers' temporary files (io/partial_files.h): the add-on's bake names and cleans them as the command line does.
+    m.def("partial_path", &partial_path, py::arg("target"), py::arg("process_id"),
+          "The temporary name for writing target in process process_id.");
+    m.def("remove_abandoned_partials", [](const std::string& folder) { return remove_abandoned_partials(folder); },
+          py::arg("folder"), "Removes the temporary files of writers that are gone; returns their names.");
+    m.attr("ABANDONED_PARTIAL_SECONDS") = kAbandonedPartialSeconds;
     // Frame ranges (native/cli/parameters_file.h): the farm's parameters files are bounded as the command line's.
     m.def("frame_number_problem", [](const py::int_& frame) -> py::object {
         int overflow = 0;

@@ -13,7 +13,6 @@ Two formats:
 from __future__ import annotations
 
 import os
-import re
 import threading
 import time
 from dataclasses import dataclass, field
@@ -62,7 +61,7 @@ def save_mesh(mesh: api.Mesh, path: str, record: Optional[str] = None) -> None:
     root, extension = os.path.splitext(path)
     # The temporary name keeps the extension: the core chooses the format by it. It does not match the cache's
     # frame pattern ('.partial' sits before the extension, after the digits), so listings never show it.
-    temporary = f"{root}.partial{os.getpid()}{extension}"
+    temporary = _core.partial_path(path, os.getpid())
     try:
         if extension.lower() == ".npz":
             arrays = {"vertices": np.ascontiguousarray(mesh.vertices, dtype=np.float32),
@@ -105,58 +104,16 @@ def writable_folder_problem(folder: str) -> Optional[str]:
     return None
 
 
-# The temporary names of a bake's (save_mesh: fluid_0023.partial4711.npz) and of the command line's
-# (.partial-4711-fluid_0023.ply) writes, with the writer's process id.
-_PARTIAL_NAMES = (re.compile(r".+\.partial(\d+)\.[^.]+"), re.compile(r"\.partial-(\d+)-.+"))
-
-
-def _process_alive(pid: int) -> bool:
-    if pid == os.getpid():
-        return True
-    if os.name == "nt":  # signal 0 is CTRL_C_EVENT there: ask for the process's exit code instead
-        import ctypes
-
-        kernel32 = ctypes.windll.kernel32
-        handle = kernel32.OpenProcess(0x1000, False, pid)  # PROCESS_QUERY_LIMITED_INFORMATION
-        if not handle:
-            return ctypes.GetLastError() == 5  # access denied: it exists
-        code = ctypes.c_ulong()
-        alive = kernel32.GetExitCodeProcess(handle, ctypes.byref(code)) and code.value == 259  # STILL_ACTIVE
-        kernel32.CloseHandle(handle)
-        return bool(alive)
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # another user's process
-        return True
-    return True
-
-
-# A writer on another machine sharing the folder has a process id this one cannot check: its temporary file goes
-# only once untouched for this long (a write takes seconds).
-ABANDONED_AFTER_SECONDS = 600
+# A temporary file of a writer on another machine sharing the folder has a process id this one cannot check: it goes
+# only once untouched for this long (a write takes seconds). The names and the rule live in the core
+# (io/partial_files.h), which the command line uses too.
+ABANDONED_AFTER_SECONDS = _core.ABANDONED_PARTIAL_SECONDS
 
 
 def remove_abandoned_partials(folder: str) -> List[str]:
     """Removes the temporary files that killed writers left in folder (their process is gone and the file untouched
     for ABANDONED_AFTER_SECONDS; a live one's stay); returns their names."""
-    removed = []
-    try:
-        names = os.listdir(folder)
-    except OSError:
-        return removed
-    for name in names:
-        match = next((m for m in (p.fullmatch(name) for p in _PARTIAL_NAMES) if m), None)
-        path = os.path.join(folder, name)
-        try:
-            if match and not _process_alive(int(match.group(1))) and \
-                    time.time() - os.path.getmtime(path) > ABANDONED_AFTER_SECONDS:
-                os.remove(path)
-                removed.append(name)
-        except OSError:
-            pass
-    return removed
+    return _core.remove_abandoned_partials(folder)
 
 
 def load_mesh(path: str) -> api.Mesh:

@@ -218,6 +218,27 @@ def test_killed_writers_temporary_files_are_removed_once_their_process_is_gone(t
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(kept + [recent])
 
 
+def test_a_killed_farm_tasks_temporary_files_go_with_the_next_run_into_its_folder(cli, tmp_path):
+    """A preempted farm task (SIGKILL mid-write) leaves its temporary mesh and record in the output folder: the next
+    command-line run writing there removes them, and nothing of a live writer's."""
+    inputs = make_sequence(tmp_path / "in")
+    out = tmp_path / "out"
+    out.mkdir()
+    dead = subprocess.Popen(["true"])
+    dead.wait()
+    abandoned = [f".partial-{dead.pid}-surface_0002.ply", f"surface_0001.ply.partial{dead.pid}.meniscus"]
+    live = f".partial-{os.getpid()}-surface_0003.ply"
+    old = time.time() - cache.ABANDONED_AFTER_SECONDS - 60
+    for name in abandoned + [live]:
+        (out / name).write_bytes(b"ply\n")
+        os.utime(out / name, (old, old))
+    result = run(cli, "reconstruct", inputs, "-o", out / "surface_{}.ply", "--frames", "1-3", "-r", "0.025", *FAST)
+    assert result.returncode == 0, result.stderr
+    assert "removed 2 temporary files of killed runs in" in result.stderr, result.stderr
+    assert sorted(p.name for p in out.iterdir()) == sorted(
+        [live] + [f"surface_000{n}.ply" for n in (1, 2, 3)] + [f"surface_000{n}.ply.meniscus" for n in (1, 2, 3)])
+
+
 def test_unwritable_cache_folder_is_named_before_any_work(tmp_path):
     (tmp_path / "a_file").write_text("not a folder")
     assert cache.writable_folder_problem(str(tmp_path / "a_file" / "cache")) == "Not a directory"

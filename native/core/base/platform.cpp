@@ -18,11 +18,13 @@
 #include <psapi.h>
 #include <shellapi.h>
 #elif defined(__APPLE__)
+#include <signal.h>
 #include <sys/resource.h>
 #include <sys/sysctl.h>
 #include <sys/types.h>
 #include <unistd.h>
 #else
+#include <signal.h>
 #include <sys/resource.h>
 #include <unistd.h>
 #endif
@@ -168,6 +170,31 @@ std::string replace_file(const std::string& utf8_from, const std::string& utf8_t
 bool remove_file(const std::string& utf8_path) {
     std::error_code error;
     return std::filesystem::remove(path_from_utf8(utf8_path), error);
+}
+
+long current_process_id() {
+#ifdef _WIN32
+    return static_cast<long>(GetCurrentProcessId());
+#else
+    return static_cast<long>(getpid());
+#endif
+}
+
+bool process_exists(long process_id) {
+    if (process_id <= 0) return false;
+    if (process_id == current_process_id()) return true;
+#ifdef _WIN32
+    // Signals do not exist there: a process exists while it can be opened and has not exited.
+    const HANDLE process = OpenProcess(PROCESS_QUERY_LIMITED_INFORMATION, FALSE, static_cast<DWORD>(process_id));
+    if (!process) return GetLastError() == ERROR_ACCESS_DENIED;  // another user's
+    DWORD code = 0;
+    const bool running = GetExitCodeProcess(process, &code) && code == STILL_ACTIVE;
+    CloseHandle(process);
+    return running;
+#else
+    if (kill(static_cast<pid_t>(process_id), 0) == 0) return true;
+    return errno == EPERM;  // another user's
+#endif
 }
 
 bool is_terminal(std::FILE* stream) {

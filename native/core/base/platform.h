@@ -25,6 +25,10 @@ std::string replace_file(const std::string& utf8_from, const std::string& utf8_t
 // Removes a file named by a UTF-8 path; false when it could not be removed.
 bool remove_file(const std::string& utf8_path);
 
+// This process's id, and whether a process with this id runs on this machine (another user's included).
+long current_process_id();
+bool process_exists(long process_id);
+
 // Whether the stream is an interactive terminal (progress bars only draw there).
 bool is_terminal(std::FILE* stream);
 

@@ -7,12 +7,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <random>
 #include <sstream>
 #include <utility>
 
 #include "base/errors.h"
 #include "base/platform.h"
+#include "io/partial_files.h"
 
 namespace fs = std::filesystem;
 
@@ -134,8 +134,8 @@ void forget_provenance(const std::string& mesh_path) {
 
 void write_provenance(const std::string& mesh_path, const std::string& record) {
     const std::string target = provenance_path(mesh_path);
-    std::random_device random;
-    const std::string temporary = target + ".partial" + std::to_string(random());
+    // Named after this process: a writer killed before the rename leaves a file the next writer can tell abandoned.
+    const std::string temporary = partial_path(target, current_process_id());
     {
         std::ofstream out(path_from_utf8(temporary), std::ios::binary);
         out << record;
