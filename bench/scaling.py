@@ -144,7 +144,7 @@ def run_ours(cli, frame, threads, args, mode):
             seconds[f"smoothing: {phase}"] = record["counts"][f"smoothing_{phase}_seconds"]
     seconds["compute"] = seconds["total"] - seconds.get("read", 0.0)
     return {"seconds": seconds, "wall": wall, "peak_memory_bytes": record.get("peak_memory_bytes"),
-            "triangles": record.get("counts", {}).get("triangles")}
+            "triangles": record.get("counts", {}).get("triangles"), "threads": record.get("counts", {}).get("threads")}
 
 
 REFERENCE_CHILD = r"""
@@ -207,21 +207,33 @@ def amdahl_serial_share(times):
 # ------------------------------------------------------------------------------------------------ busy machine
 
 BUSY_LOOP = "while True: pass"
+BUSY_FRAME = ROOT.parent / "shared" / "data" / "splashsurf" / "dam_break_frame_9_6859_particles.bgeo"
+BUSY_PARTNERS = ("idle", "meniscus", "loops")
 
 
-def start_partner(kind, cli, frame, args, env):
-    """Processes that keep the machine busy: 'openmp' another CLI reconstructing `frame` in a loop on every core (in
-    the measured run's environment: two processes of the same build), 'loops' two plain busy loops. Each in its own
-    process group, ended by its id."""
-    if kind == "openmp":
-        loop = (f"import subprocess, sys\nwhile True: subprocess.run({[str(cli), 'reconstruct', str(frame), '-o', str(pathlib.Path(tempfile.gettempdir()) / f'meniscus_busy_partner_{os.getpid()}.ply'), '-r', str(args.radius), '-l', str(args.smoothing_length), '-c', str(args.cube), '-t', str(args.iso), '--threads', '0', '-q']!r})")
-        commands = [[sys.executable, "-c", loop]]
+def start_partner(kind, cli, frame, args, env, own_sessions):
+    """Processes that keep the machine busy: 'meniscus' another CLI reconstructing `frame` in a loop with its automatic
+    thread count (in the measured run's environment: two processes of the same build), 'loops' two plain busy loops.
+    Each in its own process group, ended by its id. own_sessions: each in a session of its own, so that where Linux
+    groups the scheduler by session (autogroup) each partner is a separate program with its own fair share, as an
+    application started from elsewhere is; otherwise in this session, every thread of the machine equal (the '2x
+    floor' of two loops on two cores)."""
+    if kind == "meniscus":
+        output = pathlib.Path(tempfile.gettempdir()) / f"meniscus_busy_partner_{os.getpid()}.ply"
+        command = [str(cli), "reconstruct", str(frame), "-o", str(output), "-r", str(args.radius), "-l", str(args.smoothing_length),
+                   "-c", str(args.cube), "-t", str(args.iso), "--threads", "0", "-q"]
+        commands = [[sys.executable, "-c", f"import subprocess\nwhile True: subprocess.run({command!r})"]]
     elif kind == "loops":
         commands = [[sys.executable, "-c", BUSY_LOOP]] * 2
     else:
         return []
-    return [subprocess.Popen(c, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=dict(os.environ, **env))
-            for c in commands]
+    grouping = {"start_new_session": True} if own_sessions else {"process_group": 0}
+    processes = [subprocess.Popen(c, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=dict(os.environ, **env), **grouping)
+                 for c in commands]
+    if args.nice and own_sessions:
+        for p in processes:  # the same priority as this benchmark's own session (see --nice)
+            set_session_nice(p.pid, args.nice)
+    return processes
 
 
 def stop_partner(processes):
@@ -234,41 +246,133 @@ def stop_partner(processes):
         p.wait()
 
 
+def set_session_nice(pid, nice):
+    """Where the scheduler groups by session (Linux autogroup) a session's weight is its autogroup's nice, not its
+    processes'; both are set (negative values need root). Returns the autogroup's nice before, or None."""
+    autogroup = pathlib.Path(f"/proc/{pid}/autogroup")
+    before = None
+    try:
+        before = int(autogroup.read_text().split()[-1])
+        autogroup.write_text(str(nice))
+    except (OSError, ValueError):
+        pass
+    try:
+        os.setpriority(os.PRIO_PROCESS, pid, nice)
+    except OSError as error:
+        print(f"--nice {nice}: {error}", flush=True)
+    return before
+
+
+def runnable_elsewhere():
+    """Threads running or ready to run on the machine now, less this one (Linux: /proc/loadavg), or None."""
+    try:
+        return int(pathlib.Path("/proc/loadavg").read_text().split()[3].split("/")[0]) - 1
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def autogroup_enabled():
+    try:
+        return pathlib.Path("/proc/sys/kernel/sched_autogroup_enabled").read_text().strip() == "1"
+    except OSError:
+        return None
+
+
 def busy(args, frame):
-    """The frame's wall time idle, beside another OpenMP program and beside two busy loops, per environment."""
-    threads = (args.threads or [2])[0]
+    """The frame's wall time idle, beside a second Meniscus and beside two busy loops: rounds that take each case in
+    turn (the order rotating), so that other people's load on a shared machine falls on every case alike; per case
+    the median over the rounds and its ratio to the idle median, per variant (environment x thread count x CLI)."""
     if args.cpus:  # a small machine on a big one: this process and every child on these cores only
         os.sched_setaffinity(0, {int(c) for c in args.cpus.split(",")})
+    session_nice = set_session_nice(os.getpid(), args.nice) if args.nice else None
+    try:
+        busy_rounds(args, frame)
+    finally:
+        if session_nice is not None:  # the session this benchmark was started from outlives it
+            pathlib.Path(f"/proc/{os.getpid()}/autogroup").write_text(str(session_nice))
+
+
+def wait_until_quiet(seconds):
+    """Up to `seconds` for a moment when no other thread runs on the machine (8 samples in a row 50 ms apart); True
+    when one came."""
+    deadline, quiet = time.monotonic() + seconds, 0
+    while time.monotonic() < deadline and quiet < 8:
+        quiet = quiet + 1 if (runnable_elsewhere() or 0) <= 0 else 0
+        time.sleep(0.05)
+    return quiet >= 8
+
+
+def busy_rounds(args, frame):
     environments = [dict(e.split("=", 1) for e in group.split(",") if e) for group in args.busy_env] or [{}]
-    report = {"machine": machine(), "cpus": args.cpus, "frame": str(frame), "threads": threads, "cube_size": args.cube, "cases": []}
-    output = args.output or ROOT / "bench" / "results" / "scaling_busy.json"
-    for partner in ("idle", "openmp", "loops"):
-        for extra in environments:
-            processes = start_partner(partner, args.partner_cli or args.cli, frame, args, extra)
-            try:
-                time.sleep(1.0 if processes else 0.0)  # let the partner get going
-                walls = []
-                for _ in range(args.repeat):
+    thread_counts = args.threads or [0]
+    clis = [("this build", args.cli)] + ([("before", args.before)] if args.before else [])
+    variants = [{"cli": name, "path": str(path), "env": env, "threads": t} for name, path in clis for env in environments for t in thread_counts]
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    report = {"machine": machine(), "cpus": args.cpus, "cores_used": cores, "frame": str(frame), "radius": args.radius,
+              "cube_size": args.cube, "rounds": args.repeat, "partners_in_own_sessions": args.own_sessions,
+              "autogroup": autogroup_enabled(), "nice": args.nice,
+              "command": " ".join([os.path.basename(sys.executable)] + [str(a) for a in sys.argv]), "cases": []}
+    output = args.output or ROOT / "bench" / "results" / f"busy_{cores}cores.json"
+    runs = {(p, v): [] for p in BUSY_PARTNERS for v in range(len(variants))}
+    report["quiet_rounds"] = 0 if args.wait_quiet else None
+    for round_index in range(args.repeat):
+        order = BUSY_PARTNERS[round_index % 3:] + BUSY_PARTNERS[:round_index % 3]
+        if args.wait_quiet:
+            report["quiet_rounds"] += wait_until_quiet(args.wait_quiet)
+        for partner in order:
+            for index, variant in enumerate(variants):  # the second Meniscus is of the build measured (or --partner-cli)
+                processes = start_partner(partner, args.partner_cli or variant["path"], frame, args, variant["env"], args.own_sessions)
+                try:
+                    time.sleep(args.warm_up if processes else 0.0)  # the partner under way
+                    before = runnable_elsewhere(), os.getloadavg()[0]
                     env_backup = dict(os.environ)
-                    os.environ.update(extra)
+                    os.environ.update(variant["env"])
                     try:
-                        walls.append(run_ours(args.cli, frame, threads, args, "full")["wall"])
+                        record = run_ours(variant["path"], frame, variant["threads"], args, "full")
                     finally:
                         os.environ.clear()
                         os.environ.update(env_backup)
-            finally:
-                stop_partner(processes)
-            walls.sort()
-            case = {"beside": partner, "env": extra, "median": walls[len(walls) // 2], "best": walls[0], "walls": walls}
-            report["cases"].append(case)
-            print(f"{partner:7s} {extra or 'default environment'}: median {case['median']:.3f} s, best {case['best']:.3f} s", flush=True)
-            write_report(output, report)
-    for case in report["cases"]:
-        idle = next(c for c in report["cases"] if c["beside"] == "idle" and c["env"] == case["env"])
-        case["ratio_to_idle"] = case["median"] / idle["median"]
-        print(f"{case['beside']:7s} {case['env'] or 'default environment'}: {case['ratio_to_idle']:.2f}x idle")
+                    runs[(partner, index)].append({"wall": record["wall"], "threads_taken": record["threads"],
+                                                   "runnable_elsewhere": before[0], "load_average": before[1]})
+                finally:
+                    stop_partner(processes)
+        print(f"round {round_index + 1}/{args.repeat}: " + ", ".join(
+            f"{p} {runs[(p, 0)][-1]['wall']:.3f} s" for p in BUSY_PARTNERS) + f" (load {os.getloadavg()[0]:.1f})", flush=True)
+    report["cases"] = []
+    for index, variant in enumerate(variants):
+        idle_median = None
+        for partner in BUSY_PARTNERS:
+            walls = sorted(r["wall"] for r in runs[(partner, index)])
+            median = walls[len(walls) // 2]
+            idle_median = median if partner == "idle" else idle_median
+            loads = [r["load_average"] for r in runs[(partner, index)]]
+            report["cases"].append({"beside": partner, "cli": variant["cli"], "env": variant["env"], "threads": variant["threads"],
+                                    "median": median, "best": walls[0], "ratio_to_idle": median / idle_median,
+                                    "load_average_range": [min(loads), max(loads)], "runs": runs[(partner, index)],
+                                    "threads_taken": sorted({r["threads_taken"] for r in runs[(partner, index)] if r["threads_taken"]})})
+    report["machine"]["load_average_after"] = os.getloadavg()
     write_report(output, report)
-    print(f"\n{output}")
+    write_busy_markdown(output.with_suffix(".md"), report)
+    print(output.with_suffix(".md").read_text())
+    print(f"{output}")
+
+
+def write_busy_markdown(path, report):
+    m = report["machine"]
+    lines = [f"# Busy machine: {pathlib.Path(report['frame']).name} at c = {report['cube_size']}", "",
+             f"`{report['command']}`", "",
+             f"{report['cores_used']} cores ({m['cpu']}), commit {m['commit']}; load average {m['load_average'][0]:.1f} before, "
+             f"{m['load_average_after'][0]:.1f} after; partners in {'their own sessions' if report['partners_in_own_sessions'] else 'this session'}"
+             f" (autogroup {'on' if report['autogroup'] else 'off' if report['autogroup'] is False else 'unknown'})"
+             + (f", every process at nice {report['nice']}" if report["nice"] else "") + f"; median of {report['rounds']} rounds"
+             + (f" ({report['quiet_rounds']} began on a quiet machine)" if report.get("quiet_rounds") is not None else "") + ".", "",
+             "| build | environment | threads | taken | beside | median | best | x idle | load average |", "|---|---|---:|---:|---|---:|---:|---:|---|"]
+    for c in report["cases"]:
+        env = ",".join(f"{k}={v}" for k, v in c["env"].items()) or "default"
+        taken = ", ".join(str(int(t)) for t in c.get("threads_taken", [])) or "-"
+        lines.append(f"| {c['cli']} | {env} | {c['threads'] or 'automatic'} | {taken} | {c['beside']} | {c['median']:.3f} s | {c['best']:.3f} s | "
+                     f"{c['ratio_to_idle']:.2f} | {c['load_average_range'][0]:.1f}-{c['load_average_range'][1]:.1f} |")
+    path.write_text("\n".join(lines) + "\n")
 
 
 # ---------------------------------------------------------------------------------------------------- report
@@ -318,25 +422,40 @@ def main():
     parser.add_argument("--sizes", nargs="*", default=None, choices=sorted(SIZES), help="generated frames (default 1M without --frame)")
     parser.add_argument("--threads", type=int, nargs="*", default=None, help="thread counts (default 1, 2, 4, ... and all cores)")
     parser.add_argument("--modes", nargs="*", default=["full", "reconstruction"], choices=["full", "reconstruction"])
-    parser.add_argument("--repeat", type=int, default=3, help="runs per measurement; the best of each stage counts")
+    parser.add_argument("--repeat", type=int, default=None, help="runs per measurement; the best of each stage counts "
+                        "(3; with --busy: rounds, the median counts, 7)")
     parser.add_argument("--reference-repeat", type=int, default=1, help="runs per pysplashsurf measurement (best counts)")
     parser.add_argument("--no-reference", action="store_true", help="skip pysplashsurf")
     parser.add_argument("--cli", type=pathlib.Path, default=ROOT / "build" / "bin" / "meniscus")
     parser.add_argument("--frames-dir", type=pathlib.Path, default=ROOT / "build" / "bench")
     parser.add_argument("-r", "--radius", type=float, default=0.025)
     parser.add_argument("-l", "--smoothing-length", type=float, default=2.0)
-    parser.add_argument("-c", "--cube", type=float, default=0.5)
+    parser.add_argument("-c", "--cube", type=float, default=None, help="cube size (0.5; with --busy 1.0)")
     parser.add_argument("-t", "--iso", type=float, default=0.6)
     parser.add_argument("--output", type=pathlib.Path, default=None)
     parser.add_argument("--busy", action="store_true", help="on a busy machine instead: the (first) frame's wall time idle, "
-                        "beside another CLI reconstructing in a loop and beside two busy loops, at the first --threads (2)")
+                        "beside another CLI reconstructing in a loop and beside two busy loops, at each --threads (default "
+                        "automatic, as users get it); frame: --frame, --sizes or ../shared's dam_break_frame_9 at c = 1.0. "
+                        "Writes bench/results/busy_<cores>cores.json and .md")
     parser.add_argument("--busy-env", action="append", default=[], help="with --busy: an environment to compare, e.g. "
                         "OMP_WAIT_POLICY=PASSIVE or '' for none (repeatable; KEY=VALUE,KEY=VALUE)")
     parser.add_argument("--cpus", default=None, help="with --busy: run everything on these cores only, e.g. 0,1")
-    parser.add_argument("--partner-cli", type=pathlib.Path, default=None, help="with --busy: the CLI the OpenMP partner runs")
+    parser.add_argument("--partner-cli", type=pathlib.Path, default=None, help="with --busy: the CLI the Meniscus partner runs")
+    parser.add_argument("--before", type=pathlib.Path, default=None, help="with --busy: an older CLI measured in the same rounds")
+    parser.add_argument("--own-sessions", action="store_true", help="with --busy: each partner in a session of its own (Linux "
+                        "autogroup then gives it its own fair share: another application) instead of this one's (every thread equal)")
+    parser.add_argument("--nice", type=int, default=0, help="with --busy: run this benchmark and its partners at this priority, "
+                        "e.g. -10 on a machine others share (negative: root)")
+    parser.add_argument("--wait-quiet", type=float, default=0.0, help="with --busy: before each round wait up to this "
+                        "many seconds for a moment when nothing else runs on the machine (a shared machine)")
+    parser.add_argument("--warm-up", type=float, default=1.0, help="with --busy: seconds a partner runs before the measurements")
     args = parser.parse_args()
+    if args.cube is None:
+        args.cube = 1.0 if args.busy else 0.5
+    if args.repeat is None:
+        args.repeat = 7 if args.busy else 3
     if args.busy:
-        frame = args.frame[0] if args.frame else generated_frame((args.sizes or ["1M"])[0], args.frames_dir)
+        frame = args.frame[0] if args.frame else generated_frame(args.sizes[0], args.frames_dir) if args.sizes else BUSY_FRAME
         return busy(args, frame)
 
     cores = os.cpu_count() or 1
