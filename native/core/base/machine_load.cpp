@@ -5,7 +5,6 @@
 #include <climits>
 #include <cstdio>
 #include <cstdlib>
-#include <thread>
 
 #include "base/parallel.h"
 
@@ -19,9 +18,11 @@ namespace meniscus {
 namespace {
 
 // A few samples, a short gap apart: the fewest counts, so that a thread that ran for a moment (a kernel worker, the
-// host's own wake-up) takes no core away; programs that hold cores show in every sample. ~0.5 ms per frame.
+// host's own wake-up) takes no core away; programs that hold cores show in every sample. The first sample that finds
+// this thread alone settles it (a quiet machine: one read, microseconds); a busy one costs ~0.3 ms per frame. The
+// gaps are waited out awake: a thread that sleeps on a busy machine waits for a core to wake on (~1 ms here).
 constexpr int kSamples = 4;
-constexpr int kSampleGapMicroseconds = 150;
+constexpr auto kSampleGap = std::chrono::microseconds(100);
 
 #ifdef __linux__
 // Threads running or ready to run on the machine now (the fourth field of /proc/loadavg: running/total), this one
@@ -64,9 +65,11 @@ int automatic_frame_threads() {
     const long online = sysconf(_SC_NPROCESSORS_ONLN);
     int fewest = INT_MAX;
     for (int sample = 0; sample < kSamples; ++sample) {
-        if (sample > 0) std::this_thread::sleep_for(std::chrono::microseconds(kSampleGapMicroseconds));
+        if (sample > 0)
+            for (const auto until = std::chrono::steady_clock::now() + kSampleGap; std::chrono::steady_clock::now() < until;) {
+            }
         const int running = running_threads_now();
-        if (running < 0) return most;
+        if (running <= 1) return most;  // unreadable, or nothing else runs
         fewest = std::min(fewest, running);
     }
     return free_cores(most, usable, online > 0 && online < INT_MAX ? static_cast<int>(online) : usable, fewest - 1);
