@@ -521,6 +521,8 @@ int reconstruct_command(ReconstructArgs& args, const CliHooks& hooks) {
     const int workers = args.frames_in_parallel ? std::max(1, std::min<int>(threads, static_cast<int>(jobs.size()))) : 1;
     ReconstructArgs frame_args = args;
     frame_args.parameters.execution.threads = args.threads_per_frame ? std::max(1, threads / workers) : 1;
+    // One frame at a time with the automatic count: each frame takes the cores free as it starts (base/machine_load.h).
+    if (workers == 1 && args.threads_per_frame && args.parameters.execution.threads == 0) frame_args.parameters.execution.threads = 0;
 
     Progress progress(jobs.size(), !args.quiet && is_terminal(stderr));
     for (const std::string& duplicate : duplicates) progress.message("warning: " + duplicate);

@@ -252,7 +252,7 @@ std::vector<ParameterSpec> make_schema() {
     // ---- execution --------------------------------------------------------------------------------------------
     s.push_back(Spec::count("threads", &E::threads, execution).group("execution").label("Threads").cli("-n,--threads")
                     .range(1, 4096).soft(1, 64).automatic(0.0, "all", 4.0)
-                    .help("CPU threads the reconstruction uses (automatic: all cores)").done());
+                    .help("CPU threads the reconstruction uses (automatic: the cores other programs leave free as each frame starts)").done());
     s.push_back(Spec::real("memory_budget", &E::memory_budget, execution).group("execution").label("Memory Limit")
                     .cli("--memory-budget").unit("GiB").positive().soft(0.5, 256.0).automatic(0.0, "auto", 8.0)
                     .help("Refuse a frame that would need more memory than this, with the estimate, instead of "

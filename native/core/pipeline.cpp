@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "base/errors.h"
+#include "base/machine_load.h"
 #include "base/parallel.h"
 #include "mesh/adjacency.h"
 #include "post/container.h"
@@ -81,6 +82,11 @@ void fill_narrow_band(const PositionsView& positions, const std::vector<Attribut
 PipelineResult run_pipeline(const PositionsView& given_positions, const std::vector<AttributeInput>& given_attributes, const PipelineOptions& options) {
     validate(static_cast<const Parameters&>(options));
     validate_attribute_inputs(given_attributes, given_positions.count);
+    if (options.execution.threads == 0) {  // automatic: the cores free as the frame starts (base/machine_load.h)
+        PipelineOptions chosen = options;
+        chosen.execution.threads = automatic_frame_threads();
+        return run_pipeline(given_positions, given_attributes, chosen);
+    }
     PipelineResult result;
     // The narrow-band fill: solid water from a shell of particles, before anything else sees them.
     FilledParticles filled;
@@ -92,6 +98,7 @@ PipelineResult run_pipeline(const PositionsView& given_positions, const std::vec
     const PostprocessParams& post = options.postprocess;
     const int threads = resolve_threads(options.execution.threads);
     PipelineStats& stats = result.stats;
+    stats.set_count("threads", threads);
     if (positions.count == 0) stats.warnings.push_back("no particles: the mesh is empty");
 
     // Particles -> marching-cubes mesh (its stages time themselves: neighborhood, density, level set and marching cubes).

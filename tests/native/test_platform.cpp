@@ -12,7 +12,9 @@
 #include <vector>
 
 #include "base/decimal.h"
+#include "base/machine_load.h"
 #include "base/memory.h"
+#include "base/parallel.h"
 #include "base/platform.h"
 
 using namespace meniscus;
@@ -118,4 +120,18 @@ TEST_CASE("decimal parsing follows std::from_chars on every library", "[platform
     float f = 7;
     const std::string too_big = "1e50";
     REQUIRE(parse_decimal(too_big.data(), too_big.data() + too_big.size(), f).error == std::errc::result_out_of_range);
+}
+
+TEST_CASE("the automatic thread count leaves the cores that other programs hold", "[platform]") {
+    REQUIRE(free_cores(2, 2, 2, 0) == 2);    // an idle 2-core machine: both
+    REQUIRE(free_cores(2, 2, 2, 2) == 1);    // two busy loops: one thread, never none
+    REQUIRE(free_cores(2, 2, 2, 1) == 1);
+    REQUIRE(free_cores(16, 16, 16, 2) == 14);
+    REQUIRE(free_cores(4, 16, 16, 2) == 4);  // a smaller count asked for (OMP_NUM_THREADS) stays the most
+    REQUIRE(free_cores(2, 2, 16, 2) == 2);   // pinned to 2 of 16 cores: two threads elsewhere fall mostly elsewhere
+    REQUIRE(free_cores(2, 2, 16, 16) == 1);
+    REQUIRE(free_cores(0, 0, 0, 0) == 1);
+    const int taken = automatic_frame_threads();
+    REQUIRE(taken >= 1);
+    REQUIRE(taken <= resolve_threads(0));
 }
