@@ -174,7 +174,8 @@ def test_auto_shows_what_it_means_here():
     labels = draw(panels.MENISCUS_PT_performance)["labels"]
     cores = os.environ.get("OMP_NUM_THREADS") or str(os.cpu_count())
     # Each automatic value: its label, then what Auto means here on the row below.
-    check(labels[labels.index("Threads:") + 1] == f"all {cores} cores" or
+    meaning = f"the free ones of {cores} cores" if sys.platform.startswith("linux") else f"all {cores} cores"
+    check(labels[labels.index("Threads:") + 1] == meaning or
           labels[labels.index("Threads:") + 1] == f"{cores} (OMP_NUM_THREADS)", labels)
     meaning = labels[labels.index("Memory Limit:") + 1]
     check(meaning.startswith("75 % of ") and "GiB" in meaning, labels)

@@ -299,10 +299,14 @@ _add_pipeline_properties(MeniscusSurfaceSettings)
 
 
 def automatic_meaning(name):
-    """What an automatic value means on this machine, for the panel: 'all 16 cores', '75 % of 31.2 GiB'."""
+    """What an automatic value means on this machine, for the panel: 'the free ones of 16 cores', '75 % of 31.2 GiB'."""
     if name == "threads":
         limit = os.environ.get("OMP_NUM_THREADS", "").split(",")[0]
-        return f"{limit} (OMP_NUM_THREADS)" if limit.isdigit() else f"all {os.cpu_count() or 1} cores"
+        if limit.isdigit():
+            return f"{limit} (OMP_NUM_THREADS)"
+        # On Linux the core leaves the cores other programs keep busy (native/core/base/machine_load.h).
+        cores = os.cpu_count() or 1
+        return f"the free ones of {cores} cores" if sys.platform.startswith("linux") else f"all {cores} cores"
     if name == "memory_budget":
         installed = _installed_memory()
         return f"75 % of {installed / 2 ** 30:.1f} GiB" if installed else "75 % of the installed memory"
