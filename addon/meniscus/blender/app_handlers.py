@@ -6,7 +6,7 @@ import traceback
 import bpy
 from bpy.app.handlers import persistent
 
-from . import paths, properties, render_policy, render_state, update
+from . import fluid_domain, paths, properties, render_policy, render_state, update
 from .surfaces import surface_objects
 
 @persistent
@@ -37,7 +37,8 @@ def meniscus_depsgraph_update_post(scene, depsgraph=None):
             return
         for obj in surface_objects(scene):
             settings = obj.meniscus
-            live_source = settings.source_type == "OBJECT" and settings.source_object in updated
+            live_source = settings.source_type == "OBJECT" and (
+                settings.source_object in updated or fluid_domain.obstacle_among(settings.source_object, updated))
             if not settings.use_cache and (live_source or settings.container_object in updated):
                 update.update_surface(obj, scene, depsgraph=depsgraph)
     except Exception:

@@ -6,10 +6,12 @@ Mantaflow's own surface, and its particle system follows the display amount.
 Also here: the fluid domain the core's narrow-band fill needs (walls, gravity, band depth, obstacles; the grid's
 placement comes from the cache's config through the reader), and the defaults derived from the domain's grid.
 """
+import hashlib
 import os
 
 import bpy
 import numpy as np
+from mathutils import Euler, Matrix, Quaternion, Vector
 
 # Mantaflow's particle files in <cache>/data/, by the domain's data format (Blender's fluid cache layout).
 _PARTICLE_FILES = {"UNI": "pp_{:04d}.uni", "OPENVDB": "fluid_data_{:04d}.vdb"}
@@ -96,15 +98,47 @@ def baked_scene_frames(obj):
     return sorted(frames)
 
 
-def read_particles(obj, scene_frame, api):
-    """(positions (N, 3) float32 in world space, attributes, what was read, the reader's Particles) of the frame."""
+class DomainFrame:
+    """What a domain gives for one frame, read on the main thread: the particles (world space, where the domain is
+    now), the fluid domain for the fill (None without one) and a digest of everything besides the particles that
+    shapes the surface: the fill's domain (its settings, placement and obstacles at the cache frame) and the particle
+    file's identity. Equal digests and positions mean the same surface; the playback key and bake records carry it."""
+
+    def __init__(self, positions, attributes, kind, path, domain):
+        self.positions, self.attributes, self.kind, self.path, self.domain = positions, attributes, kind, path, domain
+        self.digest = fill_digest(domain, path)
+
+
+def read_frame(obj, scene, scene_frame, api, depsgraph=None, with_fill=True):
+    """The DomainFrame of a scene frame (main thread only: it evaluates obstacles); raises DomainError when the
+    cache cannot give it."""
     path = particle_file(obj, scene_frame)
     particles = api.read_particles(path)
     positions = np.ascontiguousarray(particles.positions, dtype=np.float32)
     if len(positions) == 0:
         raise DomainError(f"'{obj.name}' has no liquid particles at cache frame {cache_frame(obj, scene_frame)}: "
                           f"{path}")
-    return positions, dict(particles.attributes), f"fluid cache {os.path.basename(path)}", particles
+    domain = None
+    if with_fill:
+        domain = fluid_domain(obj, scene, depsgraph, getattr(particles, "fluid_domain", None),
+                              frame=cache_frame(obj, scene_frame))
+    return DomainFrame(positions, dict(particles.attributes), f"fluid cache {os.path.basename(path)}", path, domain)
+
+
+def fill_digest(domain, path):
+    """A fingerprint of the fill's domain (None: no fill) and of the particle file's path, size and modification
+    time: a changed border, band width, obstacle, gravity or cache folder changes it without a frame change."""
+    digest = hashlib.blake2b(digest_size=16)
+    stat = os.stat(path)
+    digest.update(f"{path}|{stat.st_size}|{stat.st_mtime_ns}".encode())
+    for key in sorted(domain or {}):
+        value = domain[key]
+        if key == "obstacles":
+            for soup in value:
+                digest.update(b"|obstacle:" + np.ascontiguousarray(soup, dtype=np.float32).tobytes())
+        else:
+            digest.update(f"|{key}:{np.asarray(value, dtype=np.float64).tolist()!r}".encode())
+    return digest.hexdigest()
 
 
 def gravity_direction(obj, scene):
@@ -128,16 +162,107 @@ def _is_collision_effector(obj):
     return False
 
 
-def obstacle_triangles(obj, scene, depsgraph=None):
+def obstacle_among(obj, objects):
+    """Whether one of `objects` (those a depsgraph update changed) is a collision effector that a liquid domain obj's
+    fill may use: moving an obstacle changes the fill without touching the domain."""
+    return is_liquid_domain(obj) and any(other != obj and other.type == "MESH" and _is_collision_effector(other)
+                                         for other in objects)
+
+
+# The transform channels an object's F-curves may animate (Blender's object matrix is made of these alone when no
+# constraint, driver or NLA strip takes part).
+_TRANSFORM_PATHS = ("location", "rotation_euler", "rotation_quaternion", "rotation_axis_angle", "scale",
+                    "delta_location", "delta_rotation_euler", "delta_rotation_quaternion", "delta_scale")
+
+
+def _fcurves(obj):
+    animation = obj.animation_data
+    if animation is None or animation.action is None:
+        return []
+    slot = getattr(animation, "action_slot", None)
+    if slot is not None:  # Blender 4.4+: a layered action keeps the F-curves of each animated object in a slot
+        from bpy_extras import anim_utils
+        channels = anim_utils.action_get_channelbag_for_slot(animation.action, slot)
+        return list(channels.fcurves) if channels is not None else []
+    return list(animation.action.fcurves)
+
+
+def _animated(obj):
+    """Whether obj (or a parent) moves with the frame at all."""
+    while obj is not None:
+        animation = obj.animation_data
+        if len(obj.constraints) or (animation is not None and (animation.action is not None or
+                                                              len(animation.drivers) or len(animation.nla_tracks))):
+            return True
+        obj = obj.parent
+    return False
+
+
+def _not_from_fcurves(obj):
+    """What keeps obj's matrix at another frame from being evaluated from its own and its parents' F-curves."""
+    while obj is not None:
+        animation = obj.animation_data
+        if len(obj.constraints):
+            return f"'{obj.name}' has constraints"
+        if animation is not None and (len(animation.drivers) or len(animation.nla_tracks)):
+            return f"'{obj.name}' is animated by drivers or NLA strips"
+        if obj.parent is not None and obj.parent_type != "OBJECT":
+            return f"'{obj.name}' has a {obj.parent_type.lower()} parent"
+        obj = obj.parent
+    return ""
+
+
+def _matrix_at(obj, frame):
+    """obj's world matrix at a frame, from the F-curves of its transform channels and of its parents' (as Blender
+    composes them: location + delta, delta rotation after rotation, scale x delta scale)."""
+    values = {path: list(getattr(obj, path)) for path in _TRANSFORM_PATHS}
+    for curve in _fcurves(obj):
+        channel = values.get(curve.data_path)
+        if channel is not None and not curve.mute and 0 <= curve.array_index < len(channel):
+            channel[curve.array_index] = curve.evaluate(frame)
+    mode = obj.rotation_mode
+    if mode == "QUATERNION":
+        rotation = (Quaternion(values["delta_rotation_quaternion"]).normalized().to_matrix() @
+                    Quaternion(values["rotation_quaternion"]).normalized().to_matrix())
+    elif mode == "AXIS_ANGLE":
+        angle, *axis = values["rotation_axis_angle"]
+        rotation = Matrix.Rotation(angle, 3, Vector(axis))
+    else:
+        rotation = Euler(values["delta_rotation_euler"], mode).to_matrix() @ Euler(values["rotation_euler"], mode).to_matrix()
+    scale = [a * b for a, b in zip(values["scale"], values["delta_scale"])]
+    basis = rotation @ Matrix.Diagonal(scale)
+    basis = basis.to_4x4()
+    basis.translation = [a + b for a, b in zip(values["location"], values["delta_location"])]
+    if obj.parent is not None:
+        return _matrix_at(obj.parent, frame) @ obj.matrix_parent_inverse @ basis
+    return basis
+
+
+def _obstacle_matrix(candidate, evaluated, scene, frame):
+    """Where an obstacle was at a scene frame: as evaluated when that is the current frame or it does not move,
+    else from its F-curves; refused (DomainError) when constraints, drivers or NLA move it."""
+    if frame == scene.frame_current or not _animated(candidate):
+        return np.array(evaluated.matrix_world, dtype=np.float64)
+    problem = _not_from_fcurves(candidate)
+    if problem:
+        raise DomainError(f"Obstacle '{candidate.name}' cannot be placed at frame {frame}, the frame the fluid cache "
+                          f"is read for: {problem} (set the domain's Frame Offset to 0, or key its motion)")
+    return np.array(_matrix_at(candidate, frame), dtype=np.float64)
+
+
+def obstacle_triangles(obj, scene, depsgraph=None, frame=None):
     """The domain's collision effectors (its Effector collection if set, else the scene's) as world-space triangle
-    soups, evaluated at the current frame when a depsgraph is given: 9 floats per triangle."""
+    soups, placed where they were at `frame` (the cache frame: where Mantaflow had them when it simulated that
+    frame; default the current frame), their shape as evaluated now: 9 floats per triangle."""
     settings = domain_settings(obj)
     candidates = settings.effector_group.all_objects if settings.effector_group else scene.objects
+    frame = scene.frame_current if frame is None else frame
     obstacles = []
     for candidate in candidates:
         if candidate == obj or candidate.type != "MESH" or not _is_collision_effector(candidate):
             continue
         evaluated = candidate.evaluated_get(depsgraph) if depsgraph is not None else candidate
+        matrix = _obstacle_matrix(candidate, evaluated, scene, frame)
         mesh = evaluated.to_mesh()
         try:
             mesh.calc_loop_triangles()
@@ -148,24 +273,24 @@ def obstacle_triangles(obj, scene, depsgraph=None):
             mesh.loop_triangles.foreach_get("vertices", corners)
         finally:
             evaluated.to_mesh_clear()
-        matrix = np.array(evaluated.matrix_world, dtype=np.float64)
         world = vertices.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3]
         if len(corners):
             obstacles.append(world[corners].astype(np.float32).reshape(-1).tolist())
     return obstacles
 
 
-def fluid_domain(obj, scene, depsgraph=None, placement=None):
+def fluid_domain(obj, scene, depsgraph=None, placement=None, frame=None):
     """The fluid domain for the core's narrow-band fill (the keys of FluidDomain, native/core/sph/fluid_domain.h):
     the grid's placement (origin, axes, resolution) as the reader found it in the cache's config, and what only the
-    domain's settings say: which borders are walls, gravity, how deep the band of particles reaches, obstacles."""
+    domain's settings say: which borders are walls, gravity, how deep the band of particles reaches, obstacles (where
+    they were at `frame`, the cache frame; default the current frame)."""
     settings = domain_settings(obj)
     domain = dict(placement or {})
     domain.update(
         closed_borders=[bool(getattr(settings, f"use_collision_border_{side}")) for side in _BORDERS],
         gravity=gravity_direction(obj, scene),
         band_width_cells=float(settings.particle_band_width),
-        obstacles=obstacle_triangles(obj, scene, depsgraph),
+        obstacles=obstacle_triangles(obj, scene, depsgraph, frame),
     )
     return domain
 

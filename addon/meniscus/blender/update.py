@@ -439,19 +439,20 @@ def _object_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render
     if source == obj:
         raise SurfaceError("A surface cannot be its own source")
     wanted = cache.parse_attribute_names(settings.attribute_names)
-    domain = None
+    domain, domain_digest = None, None
     if fluid_domain.is_liquid_domain(source):
-        positions, attributes, kind, particles = fluid_domain.read_particles(source, scene_time, api)
-        if fluid_domain.core_fills_narrow_band(api):
-            domain = fluid_domain.fluid_domain(source, scene, depsgraph, getattr(particles, "fluid_domain", None))
+        frame = fluid_domain.read_frame(source, scene, scene_time, api, depsgraph, fluid_domain.core_fills_narrow_band(api))
+        positions, attributes, kind, domain, domain_digest = (frame.positions, frame.attributes, frame.kind,
+                                                              frame.domain, frame.digest)
     else:
         positions, attributes, kind = sources.object_particles(source, depsgraph, wanted)
     if len(positions) == 0:
         raise SurfaceError(f"'{source.name}' has no particles at frame {int(round(scene_time))} ({kind})")
     arguments = reconstruction_arguments(settings, for_render)
-    # The positions themselves are the key: the source may change without a frame change (an edit, a re-bake).
-    key = ("OBJECT", source.name, sources.digest(positions), tuple(sorted(arguments.items())), tuple(wanted),
-           settings.use_custom_normals)
+    # The positions themselves are the key: the source may change without a frame change (an edit, a re-bake); and
+    # for a domain what the fill uses besides them (its settings, obstacles, the cache file), which may change too.
+    key = ("OBJECT", source.name, sources.digest(positions), domain_digest, tuple(sorted(arguments.items())),
+           tuple(wanted), settings.use_custom_normals)
 
     def work():
         with_domain = arguments if domain is None else {**arguments, "fluid_domain": domain}
