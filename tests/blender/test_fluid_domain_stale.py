@@ -11,11 +11,9 @@ Runs on the pool baked by tests/mantaflow/bake.sh (baked here when missing), its
 copy of the cache (every Blender: the PyPI bpy modules cannot load Mantaflow caches, and a rebuilt domain whose
 modifier is off lets its settings change without Blender touching the cache).
 """
-import json
 import os
 import pathlib
 import shutil
-import subprocess
 import sys
 import tempfile
 
@@ -26,12 +24,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import _support  # noqa: E402
 from _support import check  # noqa: E402
 
-BUILD = pathlib.Path(os.environ.get("MENISCUS_BUILD", _support.REPO / "build"))
-BAKE = BUILD / "mantaflow" / "pool_UNI"
-if not (BAKE / "scene.json").is_file():
-    subprocess.run(["bash", str(_support.REPO / "tests/mantaflow/bake.sh"), "/usr/bin/blender"], check=True,
-                   env=dict(os.environ, MENISCUS_BUILD=str(BUILD)))
-SCENE = json.loads((BAKE / "scene.json").read_text())
+BAKE, SCENE = _support.mantaflow_bake("pool_UNI")
 
 addon = _support.enable_addon()
 fluid_domain, update, render_policy = _support.addon_modules(addon, "blender.fluid_domain", "blender.update",

@@ -39,7 +39,9 @@ def meniscus_depsgraph_update_post(scene, depsgraph=None):
             settings = obj.meniscus
             live_source = settings.source_type == "OBJECT" and (
                 settings.source_object in updated or fluid_domain.obstacle_among(settings.source_object, updated))
-            if not settings.use_cache and (live_source or settings.container_object in updated):
+            # A domain's baked frames are checked against the domain as it is now: a change may make them stale.
+            baked_domain = settings.use_cache and live_source and fluid_domain.is_liquid_domain(settings.source_object)
+            if baked_domain or (not settings.use_cache and (live_source or settings.container_object in updated)):
                 update.update_surface(obj, scene, depsgraph=depsgraph)
     except Exception:
         traceback.print_exc()

@@ -99,30 +99,85 @@ def baked_scene_frames(obj):
 
 
 class DomainFrame:
-    """What a domain gives for one frame, read on the main thread: the particles (world space, where the domain is
-    now), the fluid domain for the fill (None without one) and a digest of everything besides the particles that
-    shapes the surface: the fill's domain (its settings, placement and obstacles at the cache frame) and the particle
-    file's identity. Equal digests and positions mean the same surface; the playback key and bake records carry it."""
+    """What a domain gives for one frame: the particles (world space, where the domain is now), the fluid domain for
+    the fill (None without one), what the main thread gave it (`given`: what a bake's record holds) and a digest of
+    everything besides the particles that shapes the surface: the fill's domain (its settings, placement, the
+    domain's matrix, obstacles at the cache frame) and the particle file's identity. Equal digests and positions mean
+    the same surface; the playback key carries it."""
 
-    def __init__(self, positions, attributes, kind, path, domain):
+    def __init__(self, positions, attributes, kind, path, domain, given):
         self.positions, self.attributes, self.kind, self.path, self.domain = positions, attributes, kind, path, domain
+        self.given = given
         self.digest = fill_digest(domain, path)
 
 
 def read_frame(obj, scene, scene_frame, api, depsgraph=None, with_fill=True):
-    """The DomainFrame of a scene frame (main thread only: it evaluates obstacles); raises DomainError when the
-    cache cannot give it."""
+    """The DomainFrame of a scene frame (main thread only: it evaluates the domain and its obstacles); raises
+    DomainError when the cache cannot give it."""
     path = particle_file(obj, scene_frame)
+    given = domain_arguments(obj, scene, scene_frame, depsgraph)
     particles = api.read_particles(path)
-    positions = np.ascontiguousarray(particles.positions, dtype=np.float32)
-    if len(positions) == 0:
+    if len(particles.positions) == 0:
         raise DomainError(f"'{obj.name}' has no liquid particles at cache frame {cache_frame(obj, scene_frame)}: "
                           f"{path}")
-    domain = None
-    if with_fill:
-        domain = fluid_domain(obj, scene, depsgraph, getattr(particles, "fluid_domain", None),
-                              frame=cache_frame(obj, scene_frame))
-    return DomainFrame(positions, dict(particles.attributes), f"fluid cache {os.path.basename(path)}", path, domain)
+    positions, attributes, arguments = placed(particles, {"fluid_domain": given}, with_fill)
+    return DomainFrame(positions, attributes, f"fluid cache {os.path.basename(path)}", path,
+                       arguments.get("fluid_domain"), given)
+
+
+def domain_arguments(obj, scene, scene_frame, depsgraph=None):
+    """What the main thread gives the fill of a scene frame: the domain's settings, its obstacles where they were at
+    the cache frame and the domain's matrix at the scene frame; the cache file adds the grid's placement (placed)."""
+    return fluid_domain(obj, scene, depsgraph, frame=cache_frame(obj, scene_frame), scene_frame=int(round(scene_frame)))
+
+
+# Attribute names of velocities, which turn with a moved domain (the readers' and Houdini's names).
+_VELOCITY_NAMES = ("velocity", "v", "vel", "Velocity")
+
+
+def _moved(then, now):
+    """The world transform from where the domain was simulated to where it is now (4 x 4), None when it has not
+    moved. Both matrices column-major, as Blender and the cache's config keep them."""
+    if then is None or now is None:
+        return None
+    then = np.asarray(then, dtype=np.float64).reshape(4, 4).T
+    now = np.asarray(now, dtype=np.float64).reshape(4, 4).T
+    if np.allclose(then, now, rtol=1e-6, atol=1e-6 * max(1.0, np.abs(then).max())):  # the same floats, read back
+        return None
+    return now @ np.linalg.inv(then)
+
+
+def placed(particles, arguments, with_fill=True):
+    """(positions, attributes, reconstruct's arguments) of a frame read from a domain's cache; bpy-free (a bake runs
+    it in its thread). The reader places the particles and the grid where the domain was when the frame was
+    simulated; Blender shows a baked liquid where the domain object is now (its fluid mesh follows the object), so a
+    domain moved, turned or scaled since is followed: the particles, their velocities, the grid, the fill's down and
+    the obstacles (taken, as always, as where they were when the frame was simulated: the fill happens as the liquid
+    was simulated and the result follows the domain). arguments["fluid_domain"] is what the main thread gave
+    (domain_arguments); the file's placement completes it."""
+    given = arguments["fluid_domain"]
+    read = getattr(particles, "fluid_domain", None) or {}
+    positions = np.ascontiguousarray(particles.positions, dtype=np.float32)
+    attributes = dict(particles.attributes)
+    domain = {**read, **given}
+    move = _moved(read.get("object_to_world"), given.get("object_to_world"))
+    if move is not None:
+        linear, shift = move[:3, :3], move[:3, 3]
+        positions = np.ascontiguousarray(positions @ linear.T + shift, dtype=np.float32)
+        for name in _VELOCITY_NAMES:
+            if name in attributes and np.ndim(attributes[name]) == 2:
+                attributes[name] = np.ascontiguousarray(np.asarray(attributes[name]) @ linear.T, dtype=np.float32)
+        if "origin" in domain:
+            domain["origin"] = (linear @ np.asarray(domain["origin"], dtype=np.float64) + shift).tolist()
+        if "axes" in domain:
+            domain["axes"] = (np.asarray(domain["axes"], dtype=np.float64) @ linear.T).tolist()
+        domain["obstacles"] = [(np.asarray(soup, dtype=np.float64).reshape(-1, 3) @ linear.T + shift)
+                               .astype(np.float32).reshape(-1).tolist() for soup in domain.get("obstacles", [])]
+        down = linear @ np.asarray(domain["gravity"], dtype=np.float64)
+        domain["gravity"] = (down / np.linalg.norm(down)).tolist()
+    if not with_fill:
+        return positions, attributes, {key: value for key, value in arguments.items() if key != "fluid_domain"}
+    return positions, attributes, {**arguments, "fluid_domain": domain}
 
 
 def fill_digest(domain, path):
@@ -228,7 +283,8 @@ def _matrix_at(obj, frame):
         angle, *axis = values["rotation_axis_angle"]
         rotation = Matrix.Rotation(angle, 3, Vector(axis))
     else:
-        rotation = Euler(values["delta_rotation_euler"], mode).to_matrix() @ Euler(values["rotation_euler"], mode).to_matrix()
+        rotation = (Euler(values["delta_rotation_euler"], mode).to_matrix() @
+                    Euler(values["rotation_euler"], mode).to_matrix())
     scale = [a * b for a, b in zip(values["scale"], values["delta_scale"])]
     basis = rotation @ Matrix.Diagonal(scale)
     basis = basis.to_4x4()
@@ -238,16 +294,16 @@ def _matrix_at(obj, frame):
     return basis
 
 
-def _obstacle_matrix(candidate, evaluated, scene, frame):
-    """Where an obstacle was at a scene frame: as evaluated when that is the current frame or it does not move,
-    else from its F-curves; refused (DomainError) when constraints, drivers or NLA move it."""
-    if frame == scene.frame_current or not _animated(candidate):
+def _matrix_at_frame(obj, evaluated, scene, frame, role):
+    """Where obj was at a scene frame (4 x 4): as evaluated when that is the current frame or it does not move, else
+    from its F-curves; refused (DomainError) when constraints, drivers or NLA move it."""
+    if frame == scene.frame_current or not _animated(obj):
         return np.array(evaluated.matrix_world, dtype=np.float64)
-    problem = _not_from_fcurves(candidate)
+    problem = _not_from_fcurves(obj)
     if problem:
-        raise DomainError(f"Obstacle '{candidate.name}' cannot be placed at frame {frame}, the frame the fluid cache "
-                          f"is read for: {problem} (set the domain's Frame Offset to 0, or key its motion)")
-    return np.array(_matrix_at(candidate, frame), dtype=np.float64)
+        raise DomainError(f"{role} '{obj.name}' cannot be placed at frame {frame} (the scene is at frame "
+                          f"{scene.frame_current}): {problem} (set the domain's Frame Offset to 0, or key its motion)")
+    return np.array(_matrix_at(obj, frame), dtype=np.float64)
 
 
 def obstacle_triangles(obj, scene, depsgraph=None, frame=None):
@@ -262,7 +318,7 @@ def obstacle_triangles(obj, scene, depsgraph=None, frame=None):
         if candidate == obj or candidate.type != "MESH" or not _is_collision_effector(candidate):
             continue
         evaluated = candidate.evaluated_get(depsgraph) if depsgraph is not None else candidate
-        matrix = _obstacle_matrix(candidate, evaluated, scene, frame)
+        matrix = _matrix_at_frame(candidate, evaluated, scene, frame, "Obstacle")
         mesh = evaluated.to_mesh()
         try:
             mesh.calc_loop_triangles()
@@ -279,18 +335,23 @@ def obstacle_triangles(obj, scene, depsgraph=None, frame=None):
     return obstacles
 
 
-def fluid_domain(obj, scene, depsgraph=None, placement=None, frame=None):
+def fluid_domain(obj, scene, depsgraph=None, placement=None, frame=None, scene_frame=None):
     """The fluid domain for the core's narrow-band fill (the keys of FluidDomain, native/core/sph/fluid_domain.h):
     the grid's placement (origin, axes, resolution) as the reader found it in the cache's config, and what only the
     domain's settings say: which borders are walls, gravity, how deep the band of particles reaches, obstacles (where
-    they were at `frame`, the cache frame; default the current frame)."""
+    they were at `frame`, the cache frame; default the current frame) and the domain object's matrix at
+    `scene_frame` (default the current frame; column-major, as the cache's config keeps it)."""
     settings = domain_settings(obj)
+    scene_frame = scene.frame_current if scene_frame is None else scene_frame
+    evaluated = obj.evaluated_get(depsgraph) if depsgraph is not None else obj
+    matrix = _matrix_at_frame(obj, evaluated, scene, scene_frame, "Fluid domain")
     domain = dict(placement or {})
     domain.update(
         closed_borders=[bool(getattr(settings, f"use_collision_border_{side}")) for side in _BORDERS],
         gravity=gravity_direction(obj, scene),
         band_width_cells=float(settings.particle_band_width),
         obstacles=obstacle_triangles(obj, scene, depsgraph, frame),
+        object_to_world=matrix.T.reshape(-1).tolist(),
     )
     return domain
 

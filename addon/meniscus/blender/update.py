@@ -377,10 +377,13 @@ def _build_file(mesh, settings, path, arguments, wanted, for_render):
     return _show_reconstruction(mesh, settings, os.path.basename(path) + (" (render)" if for_render else ""), result)
 
 
-def _cache_source(obj, settings, mesh, scene_time, for_render):
+def _cache_source(obj, settings, mesh, scene_time, for_render, scene=None, depsgraph=None):
     pattern = resolve_cache_pattern(obj)
     lookup = _lookup(_memory.sequences.frames(pattern), pattern, scene_time, settings)
     key = ("CACHE", lookup.file_frame, lookup.path, _file_version(lookup.path), settings.use_custom_normals)
+    if lookup.path and scene is not None and settings.source_type == "OBJECT" and \
+            fluid_domain.is_liquid_domain(settings.source_object):
+        return _domain_cache_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render, lookup, key)
 
     has_particles = settings.file_pattern and settings.source_type == "FILES"
     if lookup.path is None and lookup.file_frame is not None and has_particles:
@@ -401,6 +404,35 @@ def _cache_source(obj, settings, mesh, scene_time, for_render):
         return _load_cached_file(mesh, settings, lookup.path)
 
     return key, work, lookup.expected_path
+
+
+def _domain_cache_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render, lookup, key):
+    """A baked frame of a fluid domain's surface: played when its record says it was made from this frame's cache
+    file with the surface's parameters and the domain as it is now (settings, place, obstacles), else rebuilt from
+    the domain's cache, or refused when that cache is gone."""
+    name = os.path.basename(lookup.path)
+    domain = settings.source_object
+    scene_time = lookup.file_frame - settings.frame_offset  # the frame baked into this file (file = scene + offset)
+    try:
+        arguments = reconstruction_arguments(settings, for_render=True, normals=True)
+        given = fluid_domain.domain_arguments(domain, scene, scene_time, depsgraph)
+        try:
+            particles = fluid_domain.particle_file(domain, scene_time)
+        except fluid_domain.DomainError:  # Blender deleted the domain's cache (a setting changed): the record alone
+            particles = None
+        wanted = cache.parse_attribute_names(settings.attribute_names)
+        record = cache.provenance(particles, {**arguments, "fluid_domain": given}, wanted)
+        stale = pipeline.in_panel_terms(cache.stale_reason(lookup.path, record), for_render=True)
+    except (SurfaceError, ValueError) as error:  # no bake could be current: rebuilding shows the refusal
+        stale, particles = f"the settings are refused: {error}", None
+    if not stale:
+        # The record is part of the key: a changed domain makes the same file stale without a frame change.
+        return key + (record,), (lambda: _load_cached_file(mesh, settings, lookup.path)), lookup.expected_path
+    if particles is None:
+        raise SurfaceError(f"Stale baked frame {name}: {stale}; bake again")
+    key, work, source = _object_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render)
+    note = f"Stale baked frame {name} ({stale}): rebuilt from the fluid cache"
+    return key, lambda: _status_lines(note, work()), source
 
 
 def _particle_file(obj, file_frame):
@@ -441,7 +473,8 @@ def _object_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render
     wanted = cache.parse_attribute_names(settings.attribute_names)
     domain, domain_digest = None, None
     if fluid_domain.is_liquid_domain(source):
-        frame = fluid_domain.read_frame(source, scene, scene_time, api, depsgraph, fluid_domain.core_fills_narrow_band(api))
+        frame = fluid_domain.read_frame(source, scene, scene_time, api, depsgraph,
+                                        fluid_domain.core_fills_narrow_band(api))
         positions, attributes, kind, domain, domain_digest = (frame.positions, frame.attributes, frame.kind,
                                                               frame.domain, frame.digest)
     else:
@@ -567,7 +600,7 @@ def update_surface(obj, scene, force=False, depsgraph=None):
     for_render = render_state.is_rendering() or exported
     try:
         if settings.use_cache:
-            key, work, source = _cache_source(obj, settings, mesh, scene_time, for_render)
+            key, work, source = _cache_source(obj, settings, mesh, scene_time, for_render, scene, depsgraph)
         elif settings.source_type == "OBJECT":
             if is_subframe and pointer in _memory.shown and not force:
                 # A live simulation moves at every shutter step; one surface per frame is enough (the velocity
