@@ -107,6 +107,17 @@ def test_a_moved_obstacle_makes_the_baked_frames_stale():
     check(len(surface.data.vertices) > 1000, len(surface.data.vertices))
 
 
+def test_hold_last_good_frame_holds_no_stale_baked_frame():
+    (MESHES / "pool_0011.npz").unlink()  # a frame the bake lost: the render holds an earlier one, if current
+    settings.render_failure = "HOLD"
+    scene.frame_set(11)
+    with update.exporting(surface) as record:  # built as a final render builds it, failures under the policy
+        update.update_surface(surface, scene, force=True)
+    # Frames 8-10 were baked before the obstacle moved: none of them is the water as it is now.
+    check(list(record.failed) == [11] and record.failed[11][1] is None and "Missing" in record.failed[11][0],
+          record.failed)
+
+
 def test_a_domain_moved_after_its_bake_carries_its_surface():
     settings.use_cache = False
     scene.frame_set(10)

@@ -411,8 +411,23 @@ def _domain_cache_source(obj, settings, mesh, scene, depsgraph, scene_time, for_
     file with the surface's parameters and the domain as it is now (settings, place, obstacles), else rebuilt from
     the domain's cache, or refused when that cache is gone."""
     name = os.path.basename(lookup.path)
-    domain = settings.source_object
     scene_time = lookup.file_frame - settings.frame_offset  # the frame baked into this file (file = scene + offset)
+    stale, particles, record = _stale_domain_frame(settings, scene, depsgraph, lookup.path, scene_time)
+    if not stale:
+        # The record is part of the key: a changed domain makes the same file stale without a frame change.
+        return key + (record,), (lambda: _load_cached_file(mesh, settings, lookup.path)), lookup.expected_path
+    if particles is None:
+        raise SurfaceError(f"Stale baked frame {name}: {stale}; bake again")
+    key, work, source = _object_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render)
+    note = f"Stale baked frame {name} ({stale}): rebuilt from the fluid cache"
+    return key, lambda: _status_lines(note, work()), source
+
+
+def _stale_domain_frame(settings, scene, depsgraph, path, scene_time):
+    """(why the baked frame at path was not made from the domain's cache file of scene_time with the surface's
+    parameters and the domain as it is now, '' when it was; that particle file or None when it is gone; the record
+    it was checked against)."""
+    domain = settings.source_object
     try:
         arguments = reconstruction_arguments(settings, for_render=True, normals=True)
         given = fluid_domain.domain_arguments(domain, scene, scene_time, depsgraph)
@@ -422,17 +437,9 @@ def _domain_cache_source(obj, settings, mesh, scene, depsgraph, scene_time, for_
             particles = None
         wanted = cache.parse_attribute_names(settings.attribute_names)
         record = cache.provenance(particles, {**arguments, "fluid_domain": given}, wanted)
-        stale = pipeline.in_panel_terms(cache.stale_reason(lookup.path, record), for_render=True)
+        return pipeline.in_panel_terms(cache.stale_reason(path, record), for_render=True), particles, record
     except (SurfaceError, ValueError) as error:  # no bake could be current: rebuilding shows the refusal
-        stale, particles = f"the settings are refused: {error}", None
-    if not stale:
-        # The record is part of the key: a changed domain makes the same file stale without a frame change.
-        return key + (record,), (lambda: _load_cached_file(mesh, settings, lookup.path)), lookup.expected_path
-    if particles is None:
-        raise SurfaceError(f"Stale baked frame {name}: {stale}; bake again")
-    key, work, source = _object_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render)
-    note = f"Stale baked frame {name} ({stale}): rebuilt from the fluid cache"
-    return key, lambda: _status_lines(note, work()), source
+        return f"the settings are refused: {error}", None, None
 
 
 def _particle_file(obj, file_frame):
@@ -715,6 +722,8 @@ def _hold_earlier_frame(obj, settings, mesh, scene, scene_time):
             if settings.use_cache:
                 stale = _stale_cache_frame(obj, settings, path, file_frame) if settings.file_pattern and \
                     settings.source_type == "FILES" else ""
+                if settings.source_type == "OBJECT" and fluid_domain.is_liquid_domain(settings.source_object):
+                    stale = _stale_domain_frame(settings, scene, None, path, file_frame - settings.frame_offset)[0]
                 if stale:  # a frame of other parameters is no better to hold than none
                     raise SurfaceError(f"stale baked frame ({stale})")
                 return os.path.basename(path), _load_cached_file(mesh, settings, path)
