@@ -100,14 +100,12 @@ def baked_scene_frames(obj):
 
 class DomainFrame:
     """What a domain gives for one frame: the particles (world space, where the domain is now), the fluid domain for
-    the fill (None without one), what the main thread gave it (`given`: what a bake's record holds) and a digest of
-    everything besides the particles that shapes the surface: the fill's domain (its settings, placement, the
-    domain's matrix, obstacles at the cache frame) and the particle file's identity. Equal digests and positions mean
-    the same surface; the playback key carries it."""
+    the fill (None without one) and a digest of everything besides the particles that shapes the surface: the fill's
+    domain (its settings, placement, the domain's matrix, obstacles at the cache frame) and the particle file's
+    identity. Equal digests and positions mean the same surface; the playback key carries it."""
 
-    def __init__(self, positions, attributes, kind, path, domain, given):
+    def __init__(self, positions, attributes, kind, path, domain):
         self.positions, self.attributes, self.kind, self.path, self.domain = positions, attributes, kind, path, domain
-        self.given = given
         self.digest = fill_digest(domain, path)
 
 
@@ -122,7 +120,7 @@ def read_frame(obj, scene, scene_frame, api, depsgraph=None, with_fill=True):
                           f"{path}")
     positions, attributes, arguments = placed(particles, {"fluid_domain": given}, with_fill)
     return DomainFrame(positions, attributes, f"fluid cache {os.path.basename(path)}", path,
-                       arguments.get("fluid_domain"), given)
+                       arguments.get("fluid_domain"))
 
 
 def domain_arguments(obj, scene, scene_frame, depsgraph=None):
