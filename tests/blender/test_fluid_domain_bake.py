@@ -107,12 +107,22 @@ def test_a_moved_obstacle_makes_the_baked_frames_stale():
     check(len(surface.data.vertices) > 1000, len(surface.data.vertices))
 
 
-def test_hold_last_good_frame_holds_no_stale_baked_frame():
-    (MESHES / "pool_0011.npz").unlink()  # a frame the bake lost: the render holds an earlier one, if current
-    settings.render_failure = "HOLD"
+def test_a_frame_missing_from_the_bake_is_rebuilt_from_the_fluid_cache():
+    (MESHES / "pool_0011.npz").unlink()
     scene.frame_set(11)
-    with update.exporting(surface) as record:  # built as a final render builds it, failures under the policy
-        update.update_surface(surface, scene, force=True)
+    check("pp_0011.uni" in settings.status and not settings.status_is_error, settings.status)
+    check(len(surface.data.vertices) > 1000, len(surface.data.vertices))
+
+
+def test_hold_last_good_frame_holds_no_stale_baked_frame():
+    (COPY / "cache" / "data" / "pp_0011.uni").rename(COPY / "pp_0011.uni")  # now frame 11 cannot be built at all
+    settings.render_failure = "HOLD"
+    try:
+        scene.frame_set(11)
+        with update.exporting(surface) as record:  # built as a final render builds it, failures under the policy
+            update.update_surface(surface, scene, force=True)
+    finally:
+        (COPY / "pp_0011.uni").rename(COPY / "cache" / "data" / "pp_0011.uni")
     # Frames 8-10 were baked before the obstacle moved: none of them is the water as it is now.
     check(list(record.failed) == [11] and record.failed[11][1] is None and "Missing" in record.failed[11][0],
           record.failed)

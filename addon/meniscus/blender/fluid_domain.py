@@ -81,6 +81,15 @@ def particle_file(obj, scene_frame):
     return path
 
 
+def has_frame(obj, scene_frame):
+    """Whether the domain's cache holds the particles of a scene frame."""
+    try:
+        particle_file(obj, scene_frame)
+        return True
+    except DomainError:
+        return False
+
+
 def baked_scene_frames(obj):
     """The scene frames whose particle file is on disk (what HOLD can fall back on), from one folder listing."""
     settings = domain_settings(obj)

@@ -381,9 +381,13 @@ def _cache_source(obj, settings, mesh, scene_time, for_render, scene=None, depsg
     pattern = resolve_cache_pattern(obj)
     lookup = _lookup(_memory.sequences.frames(pattern), pattern, scene_time, settings)
     key = ("CACHE", lookup.file_frame, lookup.path, _file_version(lookup.path), settings.use_custom_normals)
-    if lookup.path and scene is not None and settings.source_type == "OBJECT" and \
-            fluid_domain.is_liquid_domain(settings.source_object):
-        return _domain_cache_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render, lookup, key)
+    if scene is not None and settings.source_type == "OBJECT" and fluid_domain.is_liquid_domain(settings.source_object):
+        if lookup.path:
+            return _domain_cache_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render, lookup, key)
+        if lookup.file_frame is not None and fluid_domain.has_frame(settings.source_object,
+                                                                    lookup.file_frame - settings.frame_offset):
+            # Outside a partial bake: the domain's cache still has the frame, so it is rebuilt from there.
+            return _object_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render)
 
     has_particles = settings.file_pattern and settings.source_type == "FILES"
     if lookup.path is None and lookup.file_frame is not None and has_particles:
