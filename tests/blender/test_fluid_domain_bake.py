@@ -107,6 +107,21 @@ def test_a_moved_obstacle_makes_the_baked_frames_stale():
     check(len(surface.data.vertices) > 1000, len(surface.data.vertices))
 
 
+def test_a_cancelled_rebake_names_the_frames_of_the_earlier_domain():
+    job, stored = bake.prepare_bake(surface, 8, 12, scene)
+    job.step()
+    job.step()  # frames 8 and 9 baked with the obstacle where it is now
+    job.cancel()
+    job.step()
+    summary = bake.finish_bake(surface, job, stored, scene)
+    check(summary.startswith("Baked 2 of 5") and "(cancelled)" in summary and "3 cached frames" in summary and
+          "fluid domain" in summary, summary)
+    scene.frame_set(9)
+    check("pool_0009.npz (cache)" in settings.status, settings.status)
+    scene.frame_set(10)
+    check("Stale baked frame pool_0010.npz" in settings.status, settings.status)
+
+
 def test_a_frame_missing_from_the_bake_is_rebuilt_from_the_fluid_cache():
     (MESHES / "pool_0011.npz").unlink()
     scene.frame_set(11)
@@ -123,9 +138,9 @@ def test_hold_last_good_frame_holds_no_stale_baked_frame():
             update.update_surface(surface, scene, force=True)
     finally:
         (COPY / "pp_0011.uni").rename(COPY / "cache" / "data" / "pp_0011.uni")
-    # Frames 8-10 were baked before the obstacle moved: none of them is the water as it is now.
-    check(list(record.failed) == [11] and record.failed[11][1] is None and "Missing" in record.failed[11][0],
-          record.failed)
+    # Frame 10 was baked before the obstacle moved, 9 after (the cancelled re-bake): 9 is the water as it is now.
+    check(list(record.failed) == [11] and record.failed[11][1] == "pool_0009.npz" and "Missing" in
+          record.failed[11][0], record.failed)
 
 
 def test_a_domain_moved_after_its_bake_carries_its_surface():
