@@ -207,13 +207,15 @@ T domain_field(const py::dict& values, const char* key, const char* expected, T 
     }
 }
 
-FluidDomain fluid_domain_from_python(const py::dict& values) {
-    static const char* const keys[] = {"origin", "axes", "resolution", "closed_borders", "gravity", "band_width_cells", "obstacles"};
+// The dict's values without the checks a fill needs (a provenance record describes whatever was given).
+FluidDomain fluid_domain_fields_from_python(const py::dict& values) {
+    static const char* const keys[] = {"origin", "axes", "resolution", "closed_borders", "gravity", "band_width_cells", "obstacles",
+                                       "object_to_world"};
     for (const auto& item : values) {
         const std::string key = py::str(item.first);
         if (std::find_if(std::begin(keys), std::end(keys), [&](const char* k) { return key == k; }) == std::end(keys))
             throw InputError("fluid_domain has no key '" + key + "' (the keys are: origin, axes, resolution, closed_borders, gravity, "
-                             "band_width_cells, obstacles)");
+                             "band_width_cells, obstacles, object_to_world)");
     }
     FluidDomain d;
     d.origin = domain_field(values, "origin", "three numbers", d.origin);
@@ -222,11 +224,17 @@ FluidDomain fluid_domain_from_python(const py::dict& values) {
     d.closed_borders = domain_field(values, "closed_borders", "six True/False (-x, +x, -y, +y, -z, +z)", d.closed_borders);
     d.gravity = domain_field(values, "gravity", "three numbers", d.gravity);
     d.band_width_cells = domain_field(values, "band_width_cells", "a number", d.band_width_cells);
+    d.object_to_world = domain_field(values, "object_to_world", "sixteen numbers (a 4x4 matrix, column-major)", d.object_to_world);
     if (values.contains("obstacles"))
         for (const auto& soup : values["obstacles"].cast<py::list>()) {
             const py::array_t<float, py::array::c_style | py::array::forcecast> triangles(py::reinterpret_borrow<py::object>(soup));
             d.obstacles.emplace_back(triangles.data(), triangles.data() + triangles.size());
         }
+    return d;
+}
+
+FluidDomain fluid_domain_from_python(const py::dict& values) {
+    FluidDomain d = fluid_domain_fields_from_python(values);
     validate_fluid_domain(d);
     return d;
 }
@@ -239,6 +247,7 @@ py::dict fluid_domain_to_python(const FluidDomain& d) {
     out["closed_borders"] = d.closed_borders;
     out["gravity"] = d.gravity;
     out["band_width_cells"] = d.band_width_cells;
+    out["object_to_world"] = d.object_to_world;
     py::list obstacles;
     for (const std::vector<float>& soup : d.obstacles) obstacles.append(to_numpy(std::vector<float>(soup), {py::ssize_t(soup.size() / 9), 3, 3}));
     out["obstacles"] = obstacles;
@@ -435,7 +444,14 @@ PYBIND11_MODULE(_core, m) {
     }, py::arg("name"), py::arg("value"), "What is wrong with a value for a parameter ('must be ..., got ...'), or None.");
     // Provenance (io/provenance.h): the add-on's bakes and cache playback, and the farm's re-export check.
     m.def("provenance_record", [](const py::dict& parameters, const std::vector<std::string>& attributes, const std::string& source) {
-        return provenance_record(parameters_from_python(parameters), attributes, source);
+        // reconstruct()'s fluid_domain, when given, shapes the mesh as much as the parameters do.
+        py::dict values = parameters.attr("copy")();
+        std::optional<FluidDomain> domain;
+        if (values.contains("fluid_domain")) {
+            const py::object given = values.attr("pop")("fluid_domain");
+            if (!given.is_none()) domain = fluid_domain_fields_from_python(given.cast<py::dict>());
+        }
+        return provenance_record(parameters_from_python(values), attributes, source, domain ? &*domain : nullptr);
     }, py::arg("parameters"), py::arg("attributes"), py::arg("source"),
           "The provenance record of a mesh made from the particle file source with these reconstruct() parameters.");
     m.def("provenance_mismatch", &provenance_mismatch, py::arg("mesh_path"), py::arg("expected"),

@@ -118,7 +118,8 @@ def _document_reconstruct():
              "    nearest particle). keep_raw_mesh: also return the marching-cubes mesh as mesh.raw.",
              "fluid_domain: the grid solver's domain the particles come from (Particles.fluid_domain, or a dict with",
              "    origin, axes, resolution, closed_borders, gravity, band_width_cells, obstacles): the interior fill",
-             "    (fill_interior) makes solid water from a narrow band of particles with it.",
+             "    (fill_interior) makes solid water from a narrow band of particles with it. Its object_to_world (the",
+             "    domain object's matrix the frame was simulated with, column-major) is not used by the fill.",
              "Raises ValueError naming a bad argument, MemoryError (with the estimate) beyond the memory budget.",
              "",
              "Parameters (the same as the command line's flags and the Blender add-on's properties):"]

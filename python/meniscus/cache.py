@@ -190,11 +190,17 @@ def reconstruct_positions(positions, particle_attributes, arguments: dict, wante
     return FrameResult(mesh, count, time.perf_counter() - started, missing_attributes(particle_attributes, wanted))
 
 
-def reconstruct_file(path: str, arguments: dict, wanted: Sequence[str] = ()) -> FrameResult:
-    """Reads one particle file and reconstructs its surface (the time includes reading)."""
+def reconstruct_file(path: str, arguments: dict, wanted: Sequence[str] = (),
+                     prepare: Optional[Callable] = None) -> FrameResult:
+    """Reads one particle file and reconstructs its surface (the time includes reading). prepare(particles, arguments)
+    -> (positions, attributes, arguments), when given, turns what was read into what is reconstructed (a fluid
+    domain's frame: placed where the domain is now, its fill's domain completed from the file's)."""
     started = time.perf_counter()
     particles = api.read_particles(path)
-    result = reconstruct_positions(particles.positions, particles.attributes, arguments, wanted)
+    positions, attributes = particles.positions, particles.attributes
+    if prepare is not None:
+        positions, attributes, arguments = prepare(particles, arguments)
+    result = reconstruct_positions(positions, attributes, arguments, wanted)
     result.seconds = time.perf_counter() - started
     return result
 
@@ -207,6 +213,7 @@ class BakeTask:
     source: str         # particle file
     target: str         # mesh file to write
     arguments: Optional[dict] = None  # this frame's own keyword arguments over the job's (a moving container's box)
+    prepare: Optional[Callable] = None  # reconstruct_file's prepare (run in the bake's thread: nothing of bpy)
 
 
 @dataclass
@@ -282,7 +289,7 @@ class BakeJob:
                 record = provenance(task.source, arguments, self.wanted_attributes)
             except (api.FormatError, OSError):
                 record = None  # the reader says what is wrong with the file
-            result = reconstruct_file(task.source, arguments, self.wanted_attributes)
+            result = reconstruct_file(task.source, arguments, self.wanted_attributes, task.prepare)
             save_mesh(result.mesh, task.target, record)
         except (api.FormatError, OSError, MemoryError, ValueError) as error:
             self.failures[task.frame] = str(error) or type(error).__name__

@@ -154,6 +154,20 @@ def render_in_new_process(blend, first, last=None, report=None, timeout=180, env
                           env=dict(os.environ, **(environment or {})))
 
 
+def mantaflow_bake(name):
+    """(folder, its scene.json) of a scene baked by tests/mantaflow/bake.sh into MENISCUS_BUILD (else build/), e.g.
+    "pool_UNI"; bakes the scenes with Debian's Blender 3.4 when it is missing."""
+    import json
+    import subprocess
+
+    build = pathlib.Path(os.environ.get("MENISCUS_BUILD", REPO / "build"))
+    folder = build / "mantaflow" / name
+    if not (folder / "scene.json").is_file():
+        subprocess.run(["bash", str(REPO / "tests/mantaflow/bake.sh"), "/usr/bin/blender"], check=True,
+                       env=dict(os.environ, MENISCUS_BUILD=str(build)))
+    return folder, json.loads((folder / "scene.json").read_text())
+
+
 def rebuilt_pool_domain(folder, frames, resolution):
     """The baked pool's liquid domain and obstacle (tests/mantaflow/bake_scene.py) rebuilt in a new scene saved in
     folder, its cache folder '//cache': the PyPI bpy modules cannot load Mantaflow caches, the add-on reads the files

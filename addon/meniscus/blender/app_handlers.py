@@ -6,7 +6,7 @@ import traceback
 import bpy
 from bpy.app.handlers import persistent
 
-from . import paths, properties, render_policy, render_state, update
+from . import fluid_domain, paths, properties, render_policy, render_state, update
 from .surfaces import surface_objects
 
 @persistent
@@ -37,8 +37,11 @@ def meniscus_depsgraph_update_post(scene, depsgraph=None):
             return
         for obj in surface_objects(scene):
             settings = obj.meniscus
-            live_source = settings.source_type == "OBJECT" and settings.source_object in updated
-            if not settings.use_cache and (live_source or settings.container_object in updated):
+            live_source = settings.source_type == "OBJECT" and (
+                settings.source_object in updated or fluid_domain.obstacle_among(settings.source_object, updated))
+            # A domain's baked frames are checked against the domain as it is now: a change may make them stale.
+            baked_domain = settings.use_cache and live_source and fluid_domain.is_liquid_domain(settings.source_object)
+            if baked_domain or (not settings.use_cache and (live_source or settings.container_object in updated)):
                 update.update_surface(obj, scene, depsgraph=depsgraph)
     except Exception:
         traceback.print_exc()

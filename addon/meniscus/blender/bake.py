@@ -10,6 +10,7 @@ script or the command line the same bake runs synchronously:
 Either way the surface switches to "Play From Cache" afterwards, and the .blend (if saved) renders from the cache.
 """
 import dataclasses
+import functools
 import os
 
 import bpy
@@ -17,7 +18,7 @@ from bpy.props import BoolProperty, IntProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
 from .. import cache, sequence
-from . import arguments as pipeline, container, operators, surfaces, update
+from . import arguments as pipeline, container, fluid_domain, operators, surfaces, update
 
 # Running UI bakes by object name (names, not references: undo and file loads invalidate object references).
 _jobs = {}
@@ -81,8 +82,10 @@ def prepare_bake(obj, frame_start=None, frame_end=None, scene=None):
     if not surfaces.is_surface(obj):
         raise BakeError(f"'{getattr(obj, 'name', obj)}' is not a Meniscus surface")
     settings = obj.meniscus
+    if settings.source_type == "OBJECT" and fluid_domain.is_liquid_domain(settings.source_object):
+        return _prepare_domain_bake(obj, frame_start, frame_end, scene or bpy.context.scene)
     if settings.source_type != "FILES":
-        raise BakeError("Baking needs a particle file sequence as the source")
+        raise BakeError("Baking needs a particle file sequence or a fluid domain as the source")
     try:
         frames = update.available_frames(obj)
     except update.SurfaceError as error:
@@ -105,6 +108,55 @@ def prepare_bake(obj, frame_start=None, frame_end=None, scene=None):
     except update.SurfaceError as error:
         raise BakeError(str(error)) from None
     tasks = _with_container_boxes(settings, scene or bpy.context.scene, tasks)
+    wanted = cache.parse_attribute_names(settings.attribute_names)
+    return cache.BakeJob(tasks, arguments, wanted), stored
+
+
+def _prepare_domain_bake(obj, frame_start, frame_end, scene):
+    """prepare_bake for a fluid domain source: its baked frames, each cache file numbered like a file source's (file
+    frame = scene frame + Frame Offset). What the fill needs that only Blender knows (the domain's matrix and settings,
+    its obstacles at the cache frame, a moving container's box) is evaluated here, stepping the scene through the
+    frames on the main thread; the bake's thread then only reads the cache files and reconstructs."""
+    settings = obj.meniscus
+    domain = settings.source_object
+    frames = [frame + settings.frame_offset for frame in fluid_domain.baked_scene_frames(domain)]
+    if not frames:
+        raise BakeError(f"'{domain.name}' has no baked frames in its cache folder {fluid_domain.cache_folder(domain)}")
+    first = min(frames) if frame_start is None else frame_start
+    last = max(frames) if frame_end is None else frame_end
+    frames = [frame for frame in frames if first <= frame <= last]
+    if not frames:
+        raise BakeError(f"No baked frames of '{domain.name}' in frames {first}-{last}")
+    stored, pattern = _cache_pattern_for_bake(obj)
+    problem = cache.writable_folder_problem(pattern.directory)  # before any frame is reconstructed
+    if problem:
+        raise BakeError(f"Cache Files: cannot write to '{pattern.directory}' ({problem})")
+    cache.remove_abandoned_partials(pattern.directory)
+    try:
+        arguments = update.reconstruction_arguments(settings, for_render=True, normals=True)
+    except update.SurfaceError as error:
+        raise BakeError(str(error)) from None
+    prepare = functools.partial(fluid_domain.placed, with_fill=fluid_domain.core_fills_narrow_band(update.api))
+    moving_container = settings.container_object is not None and _moves(settings.container_object)
+    tasks = []
+    frame, subframe = scene.frame_current, scene.frame_subframe
+    with update.updates_suspended():
+        try:
+            for file_frame in frames:
+                scene_frame = file_frame - settings.frame_offset
+                scene.frame_set(scene_frame)
+                depsgraph = bpy.context.evaluated_depsgraph_get()
+                given = {"fluid_domain": fluid_domain.domain_arguments(domain, scene, scene_frame, depsgraph)}
+                if moving_container:
+                    given.update(container.box_arguments(settings))
+                tasks.append(cache.BakeTask(file_frame, fluid_domain.particle_file(domain, scene_frame),
+                                            pattern.path(file_frame), given, prepare))
+        except fluid_domain.DomainError as error:
+            raise BakeError(str(error)) from None
+        finally:
+            scene.frame_set(frame, subframe=subframe)
+        if settings.frame_start == settings.frame_end == 0:  # never set (a file source's range): the baked frames play
+            settings.frame_start, settings.frame_end = first, last
     wanted = cache.parse_attribute_names(settings.attribute_names)
     return cache.BakeJob(tasks, arguments, wanted), stored
 

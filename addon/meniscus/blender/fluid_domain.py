@@ -6,10 +6,12 @@ Mantaflow's own surface, and its particle system follows the display amount.
 Also here: the fluid domain the core's narrow-band fill needs (walls, gravity, band depth, obstacles; the grid's
 placement comes from the cache's config through the reader), and the defaults derived from the domain's grid.
 """
+import hashlib
 import os
 
 import bpy
 import numpy as np
+from mathutils import Euler, Matrix, Quaternion, Vector
 
 # Mantaflow's particle files in <cache>/data/, by the domain's data format (Blender's fluid cache layout).
 _PARTICLE_FILES = {"UNI": "pp_{:04d}.uni", "OPENVDB": "fluid_data_{:04d}.vdb"}
@@ -79,6 +81,15 @@ def particle_file(obj, scene_frame):
     return path
 
 
+def has_frame(obj, scene_frame):
+    """Whether the domain's cache holds the particles of a scene frame."""
+    try:
+        particle_file(obj, scene_frame)
+        return True
+    except DomainError:
+        return False
+
+
 def baked_scene_frames(obj):
     """The scene frames whose particle file is on disk (what HOLD can fall back on), from one folder listing."""
     settings = domain_settings(obj)
@@ -96,15 +107,100 @@ def baked_scene_frames(obj):
     return sorted(frames)
 
 
-def read_particles(obj, scene_frame, api):
-    """(positions (N, 3) float32 in world space, attributes, what was read, the reader's Particles) of the frame."""
+class DomainFrame:
+    """What a domain gives for one frame: the particles (world space, where the domain is now), the fluid domain for
+    the fill (None without one) and a digest of everything besides the particles that shapes the surface: the fill's
+    domain (its settings, placement, the domain's matrix, obstacles at the cache frame) and the particle file's
+    identity. Equal digests and positions mean the same surface; the playback key carries it."""
+
+    def __init__(self, positions, attributes, kind, path, domain):
+        self.positions, self.attributes, self.kind, self.path, self.domain = positions, attributes, kind, path, domain
+        self.digest = fill_digest(domain, path)
+
+
+def read_frame(obj, scene, scene_frame, api, depsgraph=None, with_fill=True):
+    """The DomainFrame of a scene frame (main thread only: it evaluates the domain and its obstacles); raises
+    DomainError when the cache cannot give it."""
     path = particle_file(obj, scene_frame)
+    given = domain_arguments(obj, scene, scene_frame, depsgraph)
     particles = api.read_particles(path)
-    positions = np.ascontiguousarray(particles.positions, dtype=np.float32)
-    if len(positions) == 0:
+    if len(particles.positions) == 0:
         raise DomainError(f"'{obj.name}' has no liquid particles at cache frame {cache_frame(obj, scene_frame)}: "
                           f"{path}")
-    return positions, dict(particles.attributes), f"fluid cache {os.path.basename(path)}", particles
+    positions, attributes, arguments = placed(particles, {"fluid_domain": given}, with_fill)
+    return DomainFrame(positions, attributes, f"fluid cache {os.path.basename(path)}", path,
+                       arguments.get("fluid_domain"))
+
+
+def domain_arguments(obj, scene, scene_frame, depsgraph=None):
+    """What the main thread gives the fill of a scene frame: the domain's settings, its obstacles where they were at
+    the cache frame and the domain's matrix at the scene frame; the cache file adds the grid's placement (placed)."""
+    return fluid_domain(obj, scene, depsgraph, frame=cache_frame(obj, scene_frame), scene_frame=int(round(scene_frame)))
+
+
+# Attribute names of velocities, which turn with a moved domain (the readers' and Houdini's names).
+_VELOCITY_NAMES = ("velocity", "v", "vel", "Velocity")
+
+
+def _moved(then, now):
+    """The world transform from where the domain was simulated to where it is now (4 x 4), None when it has not
+    moved. Both matrices column-major, as Blender and the cache's config keep them."""
+    if then is None or now is None:
+        return None
+    then = np.asarray(then, dtype=np.float64).reshape(4, 4).T
+    now = np.asarray(now, dtype=np.float64).reshape(4, 4).T
+    if np.allclose(then, now, rtol=1e-6, atol=1e-6 * max(1.0, np.abs(then).max())):  # the same floats, read back
+        return None
+    return now @ np.linalg.inv(then)
+
+
+def placed(particles, arguments, with_fill=True):
+    """(positions, attributes, reconstruct's arguments) of a frame read from a domain's cache; bpy-free (a bake runs
+    it in its thread). The reader places the particles and the grid where the domain was when the frame was
+    simulated; Blender shows a baked liquid where the domain object is now (its fluid mesh follows the object), so a
+    domain moved, turned or scaled since is followed: the particles, their velocities, the grid, the fill's down and
+    the obstacles (taken, as always, as where they were when the frame was simulated: the fill happens as the liquid
+    was simulated and the result follows the domain). arguments["fluid_domain"] is what the main thread gave
+    (domain_arguments); the file's placement completes it."""
+    given = arguments["fluid_domain"]
+    read = getattr(particles, "fluid_domain", None) or {}
+    positions = np.ascontiguousarray(particles.positions, dtype=np.float32)
+    attributes = dict(particles.attributes)
+    domain = {**read, **given}
+    move = _moved(read.get("object_to_world"), given.get("object_to_world"))
+    if move is not None:
+        linear, shift = move[:3, :3], move[:3, 3]
+        positions = np.ascontiguousarray(positions @ linear.T + shift, dtype=np.float32)
+        for name in _VELOCITY_NAMES:
+            if name in attributes and np.ndim(attributes[name]) == 2:
+                attributes[name] = np.ascontiguousarray(np.asarray(attributes[name]) @ linear.T, dtype=np.float32)
+        if "origin" in domain:
+            domain["origin"] = (linear @ np.asarray(domain["origin"], dtype=np.float64) + shift).tolist()
+        if "axes" in domain:
+            domain["axes"] = (np.asarray(domain["axes"], dtype=np.float64) @ linear.T).tolist()
+        domain["obstacles"] = [(np.asarray(soup, dtype=np.float64).reshape(-1, 3) @ linear.T + shift)
+                               .astype(np.float32).reshape(-1).tolist() for soup in domain.get("obstacles", [])]
+        down = linear @ np.asarray(domain["gravity"], dtype=np.float64)
+        domain["gravity"] = (down / np.linalg.norm(down)).tolist()
+    if not with_fill:
+        return positions, attributes, {key: value for key, value in arguments.items() if key != "fluid_domain"}
+    return positions, attributes, {**arguments, "fluid_domain": domain}
+
+
+def fill_digest(domain, path):
+    """A fingerprint of the fill's domain (None: no fill) and of the particle file's path, size and modification
+    time: a changed border, band width, obstacle, gravity or cache folder changes it without a frame change."""
+    digest = hashlib.blake2b(digest_size=16)
+    stat = os.stat(path)
+    digest.update(f"{path}|{stat.st_size}|{stat.st_mtime_ns}".encode())
+    for key in sorted(domain or {}):
+        value = domain[key]
+        if key == "obstacles":
+            for soup in value:
+                digest.update(b"|obstacle:" + np.ascontiguousarray(soup, dtype=np.float32).tobytes())
+        else:
+            digest.update(f"|{key}:{np.asarray(value, dtype=np.float64).tolist()!r}".encode())
+    return digest.hexdigest()
 
 
 def gravity_direction(obj, scene):
@@ -128,16 +224,108 @@ def _is_collision_effector(obj):
     return False
 
 
-def obstacle_triangles(obj, scene, depsgraph=None):
+def obstacle_among(obj, objects):
+    """Whether one of `objects` (those a depsgraph update changed) is a collision effector that a liquid domain obj's
+    fill may use: moving an obstacle changes the fill without touching the domain."""
+    return is_liquid_domain(obj) and any(other != obj and other.type == "MESH" and _is_collision_effector(other)
+                                         for other in objects)
+
+
+# The transform channels an object's F-curves may animate (Blender's object matrix is made of these alone when no
+# constraint, driver or NLA strip takes part).
+_TRANSFORM_PATHS = ("location", "rotation_euler", "rotation_quaternion", "rotation_axis_angle", "scale",
+                    "delta_location", "delta_rotation_euler", "delta_rotation_quaternion", "delta_scale")
+
+
+def _fcurves(obj):
+    animation = obj.animation_data
+    if animation is None or animation.action is None:
+        return []
+    slot = getattr(animation, "action_slot", None)
+    if slot is not None:  # Blender 4.4+: a layered action keeps the F-curves of each animated object in a slot
+        from bpy_extras import anim_utils
+        channels = anim_utils.action_get_channelbag_for_slot(animation.action, slot)
+        return list(channels.fcurves) if channels is not None else []
+    return list(animation.action.fcurves)
+
+
+def _animated(obj):
+    """Whether obj (or a parent) moves with the frame at all."""
+    while obj is not None:
+        animation = obj.animation_data
+        if len(obj.constraints) or (animation is not None and (animation.action is not None or
+                                                              len(animation.drivers) or len(animation.nla_tracks))):
+            return True
+        obj = obj.parent
+    return False
+
+
+def _not_from_fcurves(obj):
+    """What keeps obj's matrix at another frame from being evaluated from its own and its parents' F-curves."""
+    while obj is not None:
+        animation = obj.animation_data
+        if len(obj.constraints):
+            return f"'{obj.name}' has constraints"
+        if animation is not None and (len(animation.drivers) or len(animation.nla_tracks)):
+            return f"'{obj.name}' is animated by drivers or NLA strips"
+        if obj.parent is not None and obj.parent_type != "OBJECT":
+            return f"'{obj.name}' has a {obj.parent_type.lower()} parent"
+        obj = obj.parent
+    return ""
+
+
+def _matrix_at(obj, frame):
+    """obj's world matrix at a frame, from the F-curves of its transform channels and of its parents' (as Blender
+    composes them: location + delta, delta rotation after rotation, scale x delta scale)."""
+    values = {path: list(getattr(obj, path)) for path in _TRANSFORM_PATHS}
+    for curve in _fcurves(obj):
+        channel = values.get(curve.data_path)
+        if channel is not None and not curve.mute and 0 <= curve.array_index < len(channel):
+            channel[curve.array_index] = curve.evaluate(frame)
+    mode = obj.rotation_mode
+    if mode == "QUATERNION":
+        rotation = (Quaternion(values["delta_rotation_quaternion"]).normalized().to_matrix() @
+                    Quaternion(values["rotation_quaternion"]).normalized().to_matrix())
+    elif mode == "AXIS_ANGLE":
+        angle, *axis = values["rotation_axis_angle"]
+        rotation = Matrix.Rotation(angle, 3, Vector(axis))
+    else:
+        rotation = (Euler(values["delta_rotation_euler"], mode).to_matrix() @
+                    Euler(values["rotation_euler"], mode).to_matrix())
+    scale = [a * b for a, b in zip(values["scale"], values["delta_scale"])]
+    basis = rotation @ Matrix.Diagonal(scale)
+    basis = basis.to_4x4()
+    basis.translation = [a + b for a, b in zip(values["location"], values["delta_location"])]
+    if obj.parent is not None:
+        return _matrix_at(obj.parent, frame) @ obj.matrix_parent_inverse @ basis
+    return basis
+
+
+def _matrix_at_frame(obj, evaluated, scene, frame, role):
+    """Where obj was at a scene frame (4 x 4): as evaluated when that is the current frame or it does not move, else
+    from its F-curves; refused (DomainError) when constraints, drivers or NLA move it."""
+    if frame == scene.frame_current or not _animated(obj):
+        return np.array(evaluated.matrix_world, dtype=np.float64)
+    problem = _not_from_fcurves(obj)
+    if problem:
+        raise DomainError(f"{role} '{obj.name}' cannot be placed at frame {frame} (the scene is at frame "
+                          f"{scene.frame_current}): {problem} (set the domain's Frame Offset to 0, or key its motion)")
+    return np.array(_matrix_at(obj, frame), dtype=np.float64)
+
+
+def obstacle_triangles(obj, scene, depsgraph=None, frame=None):
     """The domain's collision effectors (its Effector collection if set, else the scene's) as world-space triangle
-    soups, evaluated at the current frame when a depsgraph is given: 9 floats per triangle."""
+    soups, placed where they were at `frame` (the cache frame: where Mantaflow had them when it simulated that
+    frame; default the current frame), their shape as evaluated now: 9 floats per triangle."""
     settings = domain_settings(obj)
     candidates = settings.effector_group.all_objects if settings.effector_group else scene.objects
+    frame = scene.frame_current if frame is None else frame
     obstacles = []
     for candidate in candidates:
         if candidate == obj or candidate.type != "MESH" or not _is_collision_effector(candidate):
             continue
         evaluated = candidate.evaluated_get(depsgraph) if depsgraph is not None else candidate
+        matrix = _matrix_at_frame(candidate, evaluated, scene, frame, "Obstacle")
         mesh = evaluated.to_mesh()
         try:
             mesh.calc_loop_triangles()
@@ -148,24 +336,29 @@ def obstacle_triangles(obj, scene, depsgraph=None):
             mesh.loop_triangles.foreach_get("vertices", corners)
         finally:
             evaluated.to_mesh_clear()
-        matrix = np.array(evaluated.matrix_world, dtype=np.float64)
         world = vertices.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3]
         if len(corners):
             obstacles.append(world[corners].astype(np.float32).reshape(-1).tolist())
     return obstacles
 
 
-def fluid_domain(obj, scene, depsgraph=None, placement=None):
+def fluid_domain(obj, scene, depsgraph=None, placement=None, frame=None, scene_frame=None):
     """The fluid domain for the core's narrow-band fill (the keys of FluidDomain, native/core/sph/fluid_domain.h):
     the grid's placement (origin, axes, resolution) as the reader found it in the cache's config, and what only the
-    domain's settings say: which borders are walls, gravity, how deep the band of particles reaches, obstacles."""
+    domain's settings say: which borders are walls, gravity, how deep the band of particles reaches, obstacles (where
+    they were at `frame`, the cache frame; default the current frame) and the domain object's matrix at
+    `scene_frame` (default the current frame; column-major, as the cache's config keeps it)."""
     settings = domain_settings(obj)
+    scene_frame = scene.frame_current if scene_frame is None else scene_frame
+    evaluated = obj.evaluated_get(depsgraph) if depsgraph is not None else obj
+    matrix = _matrix_at_frame(obj, evaluated, scene, scene_frame, "Fluid domain")
     domain = dict(placement or {})
     domain.update(
         closed_borders=[bool(getattr(settings, f"use_collision_border_{side}")) for side in _BORDERS],
         gravity=gravity_direction(obj, scene),
         band_width_cells=float(settings.particle_band_width),
-        obstacles=obstacle_triangles(obj, scene, depsgraph),
+        obstacles=obstacle_triangles(obj, scene, depsgraph, frame),
+        object_to_world=matrix.T.reshape(-1).tolist(),
     )
     return domain
 

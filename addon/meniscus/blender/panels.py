@@ -148,7 +148,7 @@ class MENISCUS_PT_cache(_SurfacePanel, bpy.types.Panel):
             layout.operator("meniscus.bake_cancel", text="Cancel", icon="CANCEL").object_name = obj.name
         else:
             row = layout.row()
-            row.enabled = settings.source_type == "FILES"
+            row.enabled = settings.source_type == "FILES" or fluid_domain.is_liquid_domain(settings.source_object)
             row.operator("meniscus.bake", text="Bake Frame Range", icon="RENDER_ANIMATION").object_name = obj.name
             # The same frames on a render farm: a job bundle and its parameters file; the surface then plays its output.
             row = layout.row()

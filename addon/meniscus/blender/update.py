@@ -377,10 +377,17 @@ def _build_file(mesh, settings, path, arguments, wanted, for_render):
     return _show_reconstruction(mesh, settings, os.path.basename(path) + (" (render)" if for_render else ""), result)
 
 
-def _cache_source(obj, settings, mesh, scene_time, for_render):
+def _cache_source(obj, settings, mesh, scene_time, for_render, scene=None, depsgraph=None):
     pattern = resolve_cache_pattern(obj)
     lookup = _lookup(_memory.sequences.frames(pattern), pattern, scene_time, settings)
     key = ("CACHE", lookup.file_frame, lookup.path, _file_version(lookup.path), settings.use_custom_normals)
+    if scene is not None and settings.source_type == "OBJECT" and fluid_domain.is_liquid_domain(settings.source_object):
+        if lookup.path:
+            return _domain_cache_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render, lookup, key)
+        if lookup.file_frame is not None and fluid_domain.has_frame(settings.source_object,
+                                                                    lookup.file_frame - settings.frame_offset):
+            # Outside a partial bake: the domain's cache still has the frame, so it is rebuilt from there.
+            return _object_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render)
 
     has_particles = settings.file_pattern and settings.source_type == "FILES"
     if lookup.path is None and lookup.file_frame is not None and has_particles:
@@ -401,6 +408,42 @@ def _cache_source(obj, settings, mesh, scene_time, for_render):
         return _load_cached_file(mesh, settings, lookup.path)
 
     return key, work, lookup.expected_path
+
+
+def _domain_cache_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render, lookup, key):
+    """A baked frame of a fluid domain's surface: played when its record says it was made from this frame's cache
+    file with the surface's parameters and the domain as it is now (settings, place, obstacles), else rebuilt from
+    the domain's cache, or refused when that cache is gone."""
+    name = os.path.basename(lookup.path)
+    scene_time = lookup.file_frame - settings.frame_offset  # the frame baked into this file (file = scene + offset)
+    stale, particles, record = _stale_domain_frame(settings, scene, depsgraph, lookup.path, scene_time)
+    if not stale:
+        # The record is part of the key: a changed domain makes the same file stale without a frame change.
+        return key + (record,), (lambda: _load_cached_file(mesh, settings, lookup.path)), lookup.expected_path
+    if particles is None:
+        raise SurfaceError(f"Stale baked frame {name}: {stale}; bake again")
+    key, work, source = _object_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render)
+    note = f"Stale baked frame {name} ({stale}): rebuilt from the fluid cache"
+    return key, lambda: _status_lines(note, work()), source
+
+
+def _stale_domain_frame(settings, scene, depsgraph, path, scene_time):
+    """(why the baked frame at path was not made from the domain's cache file of scene_time with the surface's
+    parameters and the domain as it is now, '' when it was; that particle file or None when it is gone; the record
+    it was checked against)."""
+    domain = settings.source_object
+    try:
+        arguments = reconstruction_arguments(settings, for_render=True, normals=True)
+        given = fluid_domain.domain_arguments(domain, scene, scene_time, depsgraph)
+        try:
+            particles = fluid_domain.particle_file(domain, scene_time)
+        except fluid_domain.DomainError:  # Blender deleted the domain's cache (a setting changed): the record alone
+            particles = None
+        wanted = cache.parse_attribute_names(settings.attribute_names)
+        record = cache.provenance(particles, {**arguments, "fluid_domain": given}, wanted)
+        return pipeline.in_panel_terms(cache.stale_reason(path, record), for_render=True), particles, record
+    except (SurfaceError, ValueError) as error:  # no bake could be current: rebuilding shows the refusal
+        return f"the settings are refused: {error}", None, None
 
 
 def _particle_file(obj, file_frame):
@@ -439,19 +482,21 @@ def _object_source(obj, settings, mesh, scene, depsgraph, scene_time, for_render
     if source == obj:
         raise SurfaceError("A surface cannot be its own source")
     wanted = cache.parse_attribute_names(settings.attribute_names)
-    domain = None
+    domain, domain_digest = None, None
     if fluid_domain.is_liquid_domain(source):
-        positions, attributes, kind, particles = fluid_domain.read_particles(source, scene_time, api)
-        if fluid_domain.core_fills_narrow_band(api):
-            domain = fluid_domain.fluid_domain(source, scene, depsgraph, getattr(particles, "fluid_domain", None))
+        frame = fluid_domain.read_frame(source, scene, scene_time, api, depsgraph,
+                                        fluid_domain.core_fills_narrow_band(api))
+        positions, attributes, kind, domain, domain_digest = (frame.positions, frame.attributes, frame.kind,
+                                                              frame.domain, frame.digest)
     else:
         positions, attributes, kind = sources.object_particles(source, depsgraph, wanted)
     if len(positions) == 0:
         raise SurfaceError(f"'{source.name}' has no particles at frame {int(round(scene_time))} ({kind})")
     arguments = reconstruction_arguments(settings, for_render)
-    # The positions themselves are the key: the source may change without a frame change (an edit, a re-bake).
-    key = ("OBJECT", source.name, sources.digest(positions), tuple(sorted(arguments.items())), tuple(wanted),
-           settings.use_custom_normals)
+    # The positions themselves are the key: the source may change without a frame change (an edit, a re-bake); and
+    # for a domain what the fill uses besides them (its settings, obstacles, the cache file), which may change too.
+    key = ("OBJECT", source.name, sources.digest(positions), domain_digest, tuple(sorted(arguments.items())),
+           tuple(wanted), settings.use_custom_normals)
 
     def work():
         with_domain = arguments if domain is None else {**arguments, "fluid_domain": domain}
@@ -566,7 +611,7 @@ def update_surface(obj, scene, force=False, depsgraph=None):
     for_render = render_state.is_rendering() or exported
     try:
         if settings.use_cache:
-            key, work, source = _cache_source(obj, settings, mesh, scene_time, for_render)
+            key, work, source = _cache_source(obj, settings, mesh, scene_time, for_render, scene, depsgraph)
         elif settings.source_type == "OBJECT":
             if is_subframe and pointer in _memory.shown and not force:
                 # A live simulation moves at every shutter step; one surface per frame is enough (the velocity
@@ -681,6 +726,8 @@ def _hold_earlier_frame(obj, settings, mesh, scene, scene_time):
             if settings.use_cache:
                 stale = _stale_cache_frame(obj, settings, path, file_frame) if settings.file_pattern and \
                     settings.source_type == "FILES" else ""
+                if settings.source_type == "OBJECT" and fluid_domain.is_liquid_domain(settings.source_object):
+                    stale = _stale_domain_frame(settings, scene, None, path, file_frame - settings.frame_offset)[0]
                 if stale:  # a frame of other parameters is no better to hold than none
                     raise SurfaceError(f"stale baked frame ({stale})")
                 return os.path.basename(path), _load_cached_file(mesh, settings, path)

@@ -46,12 +46,39 @@ bool takes_part(const ParameterSpec& spec, const Parameters& parameters) {
 }
 
 // FNV-1a, 64 bits: a short, stable name for the parameter lines (a check of equality, not a security measure).
-std::string digest_of(const std::string& text) {
-    std::uint64_t hash = 14695981039346656037ull;
-    for (unsigned char c : text) hash = (hash ^ c) * 1099511628211ull;
+constexpr std::uint64_t kFnvOffset = 14695981039346656037ull;
+
+std::uint64_t fnv1a(std::uint64_t hash, const void* data, std::size_t size) {
+    const unsigned char* bytes = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < size; ++i) hash = (hash ^ bytes[i]) * 1099511628211ull;
+    return hash;
+}
+
+std::string hex_of(std::uint64_t hash) {
     char hex[17];
     std::snprintf(hex, sizeof hex, "%016" PRIx64, hash);
     return hex;
+}
+
+std::string digest_of(const std::string& text) { return hex_of(fnv1a(kFnvOffset, text.data(), text.size())); }
+
+// Every value of a fluid domain, bit for bit (obstacles run to millions of floats: hashed, not written out).
+std::string digest_of(const FluidDomain& d) {
+    std::uint64_t hash = kFnvOffset;
+    auto number = [&](double value) { hash = fnv1a(hash, &value, sizeof value); };
+    for (double v : d.origin) number(v);
+    for (const auto& axis : d.axes)
+        for (double v : axis) number(v);
+    for (int v : d.resolution) number(v);
+    for (bool v : d.closed_borders) number(v ? 1.0 : 0.0);
+    for (double v : d.gravity) number(v);
+    number(d.band_width_cells);
+    for (double v : d.object_to_world) number(v);
+    for (const std::vector<float>& soup : d.obstacles) {
+        number(static_cast<double>(soup.size()));  // where one obstacle ends and the next begins
+        hash = fnv1a(hash, soup.data(), soup.size() * sizeof(float));
+    }
+    return hex_of(hash);
 }
 
 // A value as people write it (0.025, not 0.025000000000000001); vectors and words as they are.
@@ -91,7 +118,7 @@ const std::string* find(const Lines& lines, const std::string& key) {
 }  // namespace
 
 std::string provenance_record(const Parameters& parameters, const std::vector<std::string>& attributes,
-                              const std::string& source_path) {
+                              const std::string& source_path, const FluidDomain* fluid_domain) {
     std::string shaping;
     for (const ParameterSpec& spec : parameter_schema()) {
         if (!shapes_the_mesh(spec)) continue;
@@ -109,6 +136,7 @@ std::string provenance_record(const Parameters& parameters, const std::vector<st
     std::string names;
     for (const std::string& name : attributes) names += (names.empty() ? "" : ",") + name;
     shaping += "attributes " + names + "\n";
+    if (fluid_domain) shaping += "fluid_domain " + digest_of(*fluid_domain) + "\n";
 
     const std::string head = std::string(kHeader) + "\ndigest " + digest_of(shaping) + "\n";
     if (source_path.empty()) return head + shaping;  // a check of the parameters alone (the particle file is gone)
@@ -166,12 +194,16 @@ std::string provenance_mismatch(const std::string& mesh_path, const std::string&
     if (!digest || !wanted_digest || *digest != *wanted_digest) {
         for (const auto& [key, value] : wanted) {
             const bool parameter = key.rfind("parameter:", 0) == 0;
-            if (!parameter && key != "attributes") continue;
+            if (!parameter && key != "attributes" && key != "fluid_domain") continue;
             const std::string* had = find(found, key);
             if (had && *had == value) continue;
+            if (key == "fluid_domain")  // a digest says nothing to a person: what it covers does
+                return "made with another fluid domain (its borders, narrow band, gravity, grid, obstacles or place)";
             const std::string name = parameter ? key.substr(10) : "interpolated attributes";
             return "made with " + name + " " + (had ? readable(*had) : "unknown") + ", now " + readable(value);
         }
+        if (find(found, "fluid_domain"))  // a fluid domain then, none now
+            return "made with a fluid domain, now without";
         return "made with other parameters";
     }
     const std::string* source = find(found, "source");

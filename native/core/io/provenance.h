@@ -19,14 +19,16 @@
 #include <vector>
 
 #include "parameters.h"
+#include "sph/fluid_domain.h"
 
 namespace meniscus {
 
 // The record a mesh made from this particle file with these parameters and attribute names carries (source_path
-// empty: a record of the parameters alone, to check a mesh whose particle file is gone). Throws FormatError when the
-// particle file cannot be found.
+// empty: a record of the parameters alone, to check a mesh whose particle file is gone). A fluid domain the
+// reconstruction was given (its walls, band, gravity, placement and obstacles shape the filled surface) is recorded
+// as a digest. Throws FormatError when the particle file cannot be found.
 std::string provenance_record(const Parameters& parameters, const std::vector<std::string>& attributes,
-                              const std::string& source_path);
+                              const std::string& source_path, const FluidDomain* fluid_domain = nullptr);
 // The record file of a mesh file.
 std::string provenance_path(const std::string& mesh_path);
 // Before a mesh is replaced: removes its record (no error when there is none).

@@ -20,6 +20,10 @@ struct FluidDomain {
     double band_width_cells = 0.0;  // particles are kept only this deep under the surface; 0: the whole liquid
     // Solid obstacles as world-space triangle soups (x y z of each corner, 9 floats per triangle); may be empty.
     std::vector<std::vector<float>> obstacles;
+    // The domain object's matrix that places the grid (column-major, Blender's object_to_world): a cache reader sets
+    // the one the frame was simulated with. The fill does not read it; the add-on moves a frame read from the cache
+    // to where the domain is now, as Blender's own fluid mesh follows the domain object.
+    std::array<double, 16> object_to_world{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
 };
 
 }  // namespace meniscus

@@ -239,6 +239,7 @@ FluidDomain fluid_domain_from_config(const MantaflowConfig& m, const std::string
     // cells) lets the narrow-band fill run on a cache read alone. A wider band (a whole liquid of particles) leaves no
     // hollow for the fill to find, so assuming the default there adds nothing; the add-on passes the domain's value.
     d.band_width_cells = kBlenderDefaultBandWidthCells;
+    for (int k = 0; k < 16; ++k) d.object_to_world[k] = M[k];
     for (int r = 0; r < 3; ++r) d.origin[r] = M[12 + r];
     for (int i = 0; i < 3; ++i) {
         const double centre = 0.5 * (double(m.p0[i]) + m.p1[i]);
