@@ -8,11 +8,15 @@ Python with the `bpy` module from PyPI:
     tests/blender/run.sh build/venv/bpy-5.2/bin/python dist/meniscus-<version>-linux_x64.zip extension
 A script enables the installed add-on (enable_addon) the way the Preferences checkbox does, then runs its test_*
 functions in order and prints one line per test and a summary. Inside Blender a failure raises
-at the end, which --python-exit-code turns into exit status 1. As a bpy module the process ends with os._exit:
+at the end, which --python-exit-code turns into exit status 1. As a bpy module the process ends with exit_now:
 some bpy wheels crash while tearing down at interpreter exit, after every result was printed, which would turn a
-pass into a crash; the verdict is decided before that and flushed first.
+pass into a crash; the verdict is decided before that and flushed first. On Windows the process ends by
+TerminateProcess, which skips the libraries' teardown as well: under Wine, bpy's DLL teardown after ExitProcess (where
+Blender prints its leak report) can outlast Wine's grace for a terminating process, and Wine then kills it with
+SIGKILL, a lost verdict (a CI run of the Windows bpy 4.5 suite, after every result of test_memory_release was printed).
 """
 import importlib
+import inspect
 import os
 import pathlib
 import sys
@@ -139,13 +143,13 @@ def render_in_new_process(blend, first, last=None, report=None, timeout=180, env
                     "    print('RENDERED', obj.meniscus.status.splitlines()[0], len(obj.data.polygons), flush=True)\n"
                     "bpy.app.handlers.render_post.append(_report)\n")
     if AS_MODULE:
-        # Factory settings and the add-on by name (see test_bake); os._exit as in run(): the teardown may crash.
+        # Factory settings and the add-on by name (see test_bake); exit_now as in run(): the teardown may crash.
         opening = (f"import addon_utils, os\naddon_utils.enable({addon_module_name()!r}, default_set=True)\n"
                    f"bpy.ops.wm.open_mainfile(filepath={blend!r})\n")
         # An animation of one frame for a single frame: what -f does (a still would not number its file).
         render = (f"bpy.context.scene.frame_start, bpy.context.scene.frame_end = {first}, {first if last is None else last}\n"
                   "bpy.ops.render.render(animation=True)\n")
-        code = "import bpy, sys\n" + opening + reporter + render + "sys.stdout.flush()\nos._exit(0)\n"
+        code = "import bpy, sys\n" + opening + reporter + render + inspect.getsource(exit_now) + "exit_now(0)\n"
         command = [sys.executable, "-c", code]
     else:
         frames = ["-f", str(first)] if last is None else ["-s", str(first), "-e", str(last), "-a"]
@@ -223,6 +227,21 @@ def check(condition, message):
         raise AssertionError(message)
 
 
+def exit_now(code):
+    """Ends the process with code at once, after flushing the standard streams, skipping the interpreter's and the
+    libraries' teardown (see the module's docstring): TerminateProcess on Windows, os._exit elsewhere."""
+    import os, sys  # self-contained: render_blend sends this function's source to the processes it starts
+    sys.stdout.flush()
+    sys.stderr.flush()
+    if os.name == "nt":
+        import ctypes
+        kernel32 = ctypes.windll.kernel32
+        kernel32.GetCurrentProcess.restype = ctypes.c_void_p
+        kernel32.TerminateProcess.argtypes = [ctypes.c_void_p, ctypes.c_uint]
+        kernel32.TerminateProcess(kernel32.GetCurrentProcess(), code)
+    os._exit(code)
+
+
 def run(namespace, cleanup=None):
     """Runs the test_* functions of a module namespace in definition order, then cleanup(); fails the process if
     any test failed (raises inside Blender, exits with status 1 as a bpy module). Never returns as a module."""
@@ -234,9 +253,7 @@ def run(namespace, cleanup=None):
         traceback.print_exc()
         failures = ["(cleanup)"]
     if AS_MODULE:
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(1 if failures else 0)
+        exit_now(1 if failures else 0)
     if failures:
         raise AssertionError("failed: " + ", ".join(failures))
 
