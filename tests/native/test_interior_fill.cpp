@@ -146,6 +146,24 @@ TEST_CASE("a thin jet over a dry floor is not filled underneath", "[interior_fil
     CHECK(fill_interior(view(particles), domain, 0.5 * kCell, 2, 0).source.empty());
 }
 
+TEST_CASE("a wide thin sheet a few cells over a dry floor raises no pillar of water under it", "[interior_fill]") {
+    const FluidDomain domain = closed_domain(24);
+    // A sheet two cells thick (all band: thinner than two bands), 2 cells of air between its shell and the floor's
+    // wall layer, far wider than high: in the middle, against one wall, in a corner, from wall to wall.
+    struct Sheet { double x0, x1, y0, y1; };
+    const Sheet sheet = GENERATE(Sheet{3, 21, 3, 21}, Sheet{1, 16, 4, 20}, Sheet{1, 14, 1, 14}, Sheet{1, 23, 8, 16});
+    const double bottom = GENERATE(4.0, 5.0);
+    CAPTURE(sheet.x0, sheet.x1, sheet.y0, sheet.y1, bottom);
+    const std::vector<float> particles = particles_where(24, [&](double x, double y, double z) {
+        return x > sheet.x0 && x < sheet.x1 && y > sheet.y0 && y < sheet.y1 && z > bottom && z < bottom + 2;
+    });
+    const InteriorClassification c = classify_interior(view(particles), domain, 2);
+    const int i = int((sheet.x0 + sheet.x1) / 2), j = int((sheet.y0 + sheet.y1) / 2);
+    for (int k = 1; k < int(bottom) - 1; ++k) CHECK(at(c, i, j, k) == CellClass::air);
+    CHECK(c.count(CellClass::liquid) == 0);
+    CHECK(fill_interior(view(particles), domain, 0.5 * kCell, 2, 0).source.empty());
+}
+
 TEST_CASE("an obstacle sticking out of a pool: solid when described, and the pool is filled either way", "[interior_fill]") {
     FluidDomain domain = closed_domain(24);
     // Pool band as above; a box obstacle from cell 6 to 12 in x and y, floor to cell 16 in z: no particles in it.

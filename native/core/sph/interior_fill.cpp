@@ -298,8 +298,12 @@ InteriorClassification classify_interior(const PositionsView& positions, const F
 
     // Every boundary between liquid and air is a free surface, which carries the band's particles. A group of liquid
     // votes that borders air votes directly over more faces than it has shell above it is air under something
-    // airborne (a jet or a drop over a dry floor), not water: its sides would need walls. Water held by an obstacle
-    // nobody described borders that obstacle's cells (which look like air) only along the obstacle's sides.
+    // airborne (a jet or a drop over a dry floor), not water: its sides would need walls. So is a group whose sides
+    // border air votes over more than a third of the faces they share with air votes, walls, obstacles, shell and the
+    // grid's edge: air under a drop or sheet wider than its height over the floor, open all round or on two sides
+    // in a corner (the first rule alone would take it for a pool and raise a pillar of water under it). Water held
+    // by an obstacle nobody described borders that obstacle's cells (which look like air) only along the
+    // obstacle's sides, and the domain's walls elsewhere.
     {
         std::vector<int32_t> group(static_cast<std::size_t>(grid.cells), -1);
         std::vector<int64_t> members, stack;
@@ -310,7 +314,7 @@ InteriorClassification classify_interior(const PositionsView& positions, const F
             members.clear();
             stack.assign(1, seed);
             group[seed] = groups;
-            int64_t open_faces = 0, covered_faces = 0;
+            int64_t open_faces = 0, covered_faces = 0, open_sides = 0, bounded_sides = 0;
             while (!stack.empty()) {
                 const int64_t cell = stack.back();
                 stack.pop_back();
@@ -318,6 +322,19 @@ InteriorClassification classify_interior(const PositionsView& positions, const F
                 const std::array<int, 3> c = grid.coords(cell);
                 const int up = c[up_axis] + (up_positive ? 1 : -1);
                 if (up >= 0 && up < grid.n[up_axis] && cells[cell + up_step] == CellClass::shell) ++covered_faces;
+                for (int a = 0; a < 3; ++a) {
+                    if (a == up_axis) continue;
+                    for (int dir = -1; dir <= 1; dir += 2) {
+                        const int x = c[a] + dir;
+                        if (x < 0 || x >= grid.n[a]) {
+                            ++bounded_sides;
+                            continue;
+                        }
+                        const int64_t side = cell + dir * grid.stride[a];
+                        if (votes[side] == kAir) ++open_sides;
+                        else if (cells[side] == CellClass::shell || cells[side] == CellClass::solid) ++bounded_sides;
+                    }
+                }
                 for_each_face_neighbour(grid, cell, [&](int64_t next) {
                     if (next < 0) return;
                     if (votes[next] == kAir) ++open_faces;
@@ -327,7 +344,7 @@ InteriorClassification classify_interior(const PositionsView& positions, const F
                 });
             }
             ++groups;
-            if (open_faces > covered_faces)
+            if (open_faces > covered_faces || 2 * open_sides > bounded_sides)
                 for (int64_t cell : members) votes[cell] = kAir;
         }
     }
