@@ -2,9 +2,11 @@
 // hand-made shells shaped like Mantaflow's narrow band (2 x 2 x 2 jittered particles per cell, 3 cells deep).
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <initializer_list>
 #include <limits>
 #include <vector>
 
@@ -196,6 +198,51 @@ TEST_CASE("an obstacle sticking out of a pool: solid when described, and the poo
         CHECK(at(c, 18, 18, 4) == CellClass::liquid);
         CHECK(c.split_components == 0);
     }
+}
+
+// The 2 triangles of each listed face of the box from lo to hi (cells), world space: faces 0..5 are -z, +z, -y, +y,
+// -x, +x.
+std::vector<float> box_faces(const std::array<double, 3>& lo, const std::array<double, 3>& hi, std::initializer_list<int> which) {
+    const int faces[6][4] = {{0, 1, 3, 2}, {4, 6, 7, 5}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 5, 7, 3}};
+    const auto corner = [&](int v, int a) { return float(((v >> a) & 1 ? hi[a] : lo[a]) * kCell); };
+    std::vector<float> soup;
+    for (int f : which)
+        for (int t : {0, 1}) {
+            const int tri[3] = {faces[f][0], faces[f][1 + t], faces[f][2 + t]};
+            for (int v : tri) soup.insert(soup.end(), {corner(v, 0), corner(v, 1), corner(v, 2)});
+        }
+    return soup;
+}
+
+TEST_CASE("a single-sided plane obstacle gives solid cells where it lies", "[interior_fill]") {
+    FluidDomain domain = closed_domain(24);
+    domain.obstacles.push_back(box_faces({4.5, 4.5, 6.4}, {19.5, 19.5, 6.4}, {0}));  // a horizontal square over 16 x 16 cells
+    const std::vector<float> particles = particles_where(24, pool_band);
+    const InteriorClassification c = classify_interior(view(particles), domain, 2);
+    for (int i = 4; i < 20; ++i) CHECK(at(c, i, 12, 6) == CellClass::solid);
+    CHECK(at(c, 12, 12, 5) != CellClass::solid);
+    CHECK(at(c, 12, 12, 7) == CellClass::liquid);
+    CHECK(at(c, 2, 12, 6) == CellClass::liquid);  // beside it, the pool
+    CHECK(c.count(CellClass::solid) == std::size_t(24 * 24 * 24 - 22 * 22 * 22 + 16 * 16));
+}
+
+TEST_CASE("water in an open box obstacle is held by its walls and filled, the dry floor around it is not", "[interior_fill]") {
+    FluidDomain domain = closed_domain(24);
+    // A box without a lid from the floor's wall layer up to cell 14; water up to cell 12 in it, its band in the top 3
+    // cells; nothing outside it. Its walls, single planes, would otherwise let the water's cells see the dry floor.
+    domain.obstacles.push_back(box_faces({6.2, 6.2, 1.2}, {17.8, 17.8, 14}, {0, 2, 3, 4, 5}));
+    const std::vector<float> particles = particles_where(24, [](double x, double y, double z) {
+        return x > 7 && x < 17 && y > 7 && y < 17 && pool_band(x, y, z);
+    });
+    const InteriorClassification c = classify_interior(view(particles), domain, 2);
+    for (int k = 2; k <= 7; ++k) CHECK(at(c, 12, 12, k) == CellClass::liquid);
+    CHECK(at(c, 6, 12, 4) == CellClass::solid);
+    CHECK(at(c, 17, 12, 4) == CellClass::solid);
+    CHECK(at(c, 12, 12, 1) == CellClass::solid);
+    CHECK(at(c, 3, 3, 4) == CellClass::air);
+    CHECK(at(c, 20, 12, 2) == CellClass::air);
+    CHECK(at(c, 12, 12, 16) == CellClass::air);
+    CHECK(c.count(CellClass::liquid) >= std::size_t(10 * 10 * 6));
 }
 
 TEST_CASE("the fill is the same for every thread count", "[interior_fill][threads]") {

@@ -108,11 +108,92 @@ void spread(const Grid& grid, std::vector<int64_t>& queue, std::vector<T>& value
 
 std::string field(const char* name) { return std::string("fluid_domain.") + name; }
 
-// Obstacles (closed triangle soups, world space) -> solid cells: a cell is inside when its centre is, by the parity
-// of the crossings along the grid's third axis.
+// Whether every edge of the soup is shared by an even number of its triangles (corners matched exactly: a mesh's
+// triangles share their corners' world coordinates): a closed surface, whose inside parity can tell.
+bool closed_soup(const std::vector<float>& soup) {
+    using Corner = std::array<float, 3>;
+    std::vector<std::pair<Corner, Corner>> edges;
+    edges.reserve(soup.size() / 3);
+    for (std::size_t t = 0; t + 9 <= soup.size(); t += 9)
+        for (int e = 0; e < 3; ++e) {
+            const std::size_t a = t + 3 * e, b = t + 3 * ((e + 1) % 3);
+            Corner p{soup[a], soup[a + 1], soup[a + 2]}, q{soup[b], soup[b + 1], soup[b + 2]};
+            if (q < p) std::swap(p, q);
+            edges.emplace_back(p, q);
+        }
+    std::sort(edges.begin(), edges.end());
+    for (std::size_t s = 0; s < edges.size();) {
+        std::size_t e = s;
+        while (e < edges.size() && edges[e] == edges[s]) ++e;
+        if ((e - s) % 2 != 0) return false;
+        s = e;
+    }
+    return !edges.empty();
+}
+
+// Whether the triangle (grid coordinates) meets the closed unit cell at `lo`, by the separating axis test: the
+// cell's three axes, the triangle's normal and the nine cross products of its edges with the cell's axes.
+bool triangle_meets_cell(const std::array<Vec3, 3>& p, const std::array<int, 3>& lo) {
+    std::array<Vec3, 3> v;
+    for (int c = 0; c < 3; ++c)
+        for (int a = 0; a < 3; ++a) v[c][a] = p[c][a] - (lo[a] + 0.5);
+    const auto cross = [](const Vec3& a, const Vec3& b) { return Vec3{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]}; };
+    const auto separates = [&](const Vec3& axis) {
+        const double radius = 0.5 * (std::fabs(axis[0]) + std::fabs(axis[1]) + std::fabs(axis[2]));
+        double lo_p = std::numeric_limits<double>::infinity(), hi_p = -lo_p;
+        for (const Vec3& q : v) {
+            const double d = q[0] * axis[0] + q[1] * axis[1] + q[2] * axis[2];
+            lo_p = std::min(lo_p, d);
+            hi_p = std::max(hi_p, d);
+        }
+        return lo_p > radius || hi_p < -radius;  // a zero axis never separates
+    };
+    const std::array<Vec3, 3> edge{Vec3{v[1][0] - v[0][0], v[1][1] - v[0][1], v[1][2] - v[0][2]},
+                                   Vec3{v[2][0] - v[1][0], v[2][1] - v[1][1], v[2][2] - v[1][2]},
+                                   Vec3{v[0][0] - v[2][0], v[0][1] - v[2][1], v[0][2] - v[2][2]}};
+    for (int a = 0; a < 3; ++a) {
+        Vec3 unit{0.0, 0.0, 0.0};
+        unit[a] = 1.0;
+        if (separates(unit)) return false;
+        for (const Vec3& e : edge)
+            if (separates(cross(e, unit))) return false;
+    }
+    return !separates(cross(edge[0], edge[1]));
+}
+
+// The cells an open soup's triangles meet (a plane, an open box, a mesh with holes): parity cannot tell its inside,
+// and a single-sided wall holds water all the same. The cells form a layer that no face-to-face path crosses.
+void voxelize_surface(const std::vector<float>& soup, const GridMap& map, const Grid& grid, std::vector<CellClass>& cells) {
+    for (std::size_t t = 0; t + 9 <= soup.size(); t += 9) {
+        std::array<Vec3, 3> p;
+        for (int c = 0; c < 3; ++c) p[c] = map.grid({soup[t + 3 * c], soup[t + 3 * c + 1], soup[t + 3 * c + 2]});
+        std::array<int, 3> lo{}, hi{};
+        bool outside = false;
+        for (int a = 0; a < 3; ++a) {
+            // Clamped to the grid before the conversion to int: an obstacle far outside must not overflow it.
+            const double low = std::min({p[0][a], p[1][a], p[2][a]}), high = std::max({p[0][a], p[1][a], p[2][a]});
+            lo[a] = int(std::clamp(std::floor(low), 0.0, double(grid.n[a])));
+            hi[a] = int(std::clamp(std::floor(high), -1.0, double(grid.n[a] - 1)));
+            outside = outside || lo[a] > hi[a];
+        }
+        if (outside) continue;
+        for (int k = lo[2]; k <= hi[2]; ++k)
+            for (int j = lo[1]; j <= hi[1]; ++j)
+                for (int i = lo[0]; i <= hi[0]; ++i)
+                    if (triangle_meets_cell(p, {i, j, k})) cells[grid.index(i, j, k)] = CellClass::solid;
+    }
+}
+
+// Obstacles (triangle soups, world space) -> solid cells. A closed soup: a cell is inside when its centre is, by the
+// parity of the crossings along the grid's third axis (the cells its surface only grazes stay water, so the water
+// reaches the obstacle). An open soup: the cells its triangles meet.
 void voxelize_obstacles(const FluidDomain& domain, const GridMap& map, const Grid& grid, std::vector<CellClass>& cells) {
     std::vector<std::pair<int64_t, double>> crossings;  // (column i + nx j, height in cells)
     for (const std::vector<float>& soup : domain.obstacles) {
+        if (!closed_soup(soup)) {
+            voxelize_surface(soup, map, grid, cells);
+            continue;
+        }
         for (std::size_t t = 0; t + 9 <= soup.size(); t += 9) {
             std::array<Vec3, 3> p;
             for (int c = 0; c < 3; ++c) p[c] = map.grid({soup[t + 3 * c], soup[t + 3 * c + 1], soup[t + 3 * c + 2]});
