@@ -631,18 +631,15 @@ InteriorFill fill_interior(const PositionsView& positions, const FluidDomain& do
     std::vector<int64_t> fill_cells;
     for (int64_t cell = 0; cell < grid.cells; ++cell)
         if (is_fill_cell(cell)) fill_cells.push_back(cell);
-    check_memory_budget(double(fill_cells.size()) * per_cell * 2.0 * (12.0 + 4.0), memory_budget_bytes, "the interior fill's particles");
+    // Per fill cell its offset; per point its position and source, and the pipeline's copy of the position.
+    check_memory_budget(double(fill_cells.size()) * (8.0 + per_cell * (12.0 + 4.0 + 12.0)), memory_budget_bytes, "the interior fill's particles");
 
     const double keep_away2 = kKeepAway * kKeepAway * lattice_spacing * lattice_spacing;
-    std::vector<std::vector<float>> cell_points(fill_cells.size());
-    std::vector<std::vector<uint32_t>> cell_sources(fill_cells.size());
-    parallel_for(static_cast<int64_t>(fill_cells.size()), threads, [&](int64_t f) {
+    // Calls emit(world position, source particle) for each lattice point the fill cell keeps, in a fixed order.
+    const auto for_each_point = [&](int64_t f, auto&& emit) {
         const int64_t cell = fill_cells[f];
         const std::array<int, 3> c = grid.coords(cell);
         const bool shell = cells[cell] == CellClass::shell;
-        std::vector<float>& points = cell_points[f];
-        std::vector<uint32_t>& sources = cell_sources[f];
-        points.reserve(3 * static_cast<std::size_t>(per_cell));
         for (int z = 0; z < m[2]; ++z)
             for (int y = 0; y < m[1]; ++y)
                 for (int x = 0; x < m[0]; ++x) {
@@ -672,22 +669,35 @@ InteriorFill fill_interior(const PositionsView& positions, const FluidDomain& do
                                 }
                         if (nearest < keep_away2) continue;
                     }
-                    points.insert(points.end(), {float(w[0]), float(w[1]), float(w[2])});
-                    sources.push_back(source == kNoSource ? 0u : source);
+                    emit(w, source == kNoSource ? 0u : source);
                 }
+    };
+    // Counted per cell first, then written once into the output at each cell's offset: no per-cell buffers (at
+    // resolution 512 their headers and allocations cost more than the points) and no second copy of the points.
+    std::vector<std::size_t> offset(fill_cells.size() + 1, 0);
+    parallel_for(static_cast<int64_t>(fill_cells.size()), threads, [&](int64_t f) {
+        if (cells[fill_cells[f]] != CellClass::shell) {  // every point kept
+            offset[f + 1] = static_cast<std::size_t>(per_cell);
+            return;
+        }
+        std::size_t kept = 0;
+        for_each_point(f, [&](const Vec3&, uint32_t) { ++kept; });
+        offset[f + 1] = kept;
     }, 64);
-    std::size_t total = 0;
-    for (const auto& s : cell_sources) total += s.size();
-    out.positions.reserve(3 * total);
-    out.source.reserve(total);
-    for (std::size_t f = 0; f < fill_cells.size(); ++f) {
-        out.positions.insert(out.positions.end(), cell_points[f].begin(), cell_points[f].end());
-        out.source.insert(out.source.end(), cell_sources[f].begin(), cell_sources[f].end());
-    }
-    if (positions.count == 0) {  // nothing to take attributes from, and nothing was shell: nothing was filled
-        out.positions.clear();
-        out.source.clear();
-    }
+    for (std::size_t f = 0; f < fill_cells.size(); ++f) offset[f + 1] += offset[f];
+    const std::size_t total = positions.count == 0 ? 0 : offset.back();  // no particles: nothing to take attributes from
+    out.positions.resize(3 * total);
+    out.source.resize(total);
+    if (total > 0)
+        parallel_for(static_cast<int64_t>(fill_cells.size()), threads, [&](int64_t f) {
+            std::size_t o = offset[f];
+            for_each_point(f, [&](const Vec3& w, uint32_t source) {
+                out.positions[3 * o] = float(w[0]);
+                out.positions[3 * o + 1] = float(w[1]);
+                out.positions[3 * o + 2] = float(w[2]);
+                out.source[o++] = source;
+            });
+        }, 64);
     return out;
 }
 
