@@ -109,6 +109,24 @@ def test_a_thin_jet_is_not_filled(bakes):
         assert volume(filled) == pytest.approx(volume(reconstruct_frame(bakes, "splash", frame, fill_interior=0)), rel=1e-9)
 
 
+def test_the_landed_splash_overshoots_only_into_the_floors_wall_cells(bakes):
+    # After the jet lands (frames 13-24) ours encloses 1.01-1.20 of Mantaflow's volume with nothing filled: Mantaflow's
+    # mesh ends 0.8 of a cell inside the domain on every closed side (in its layer of wall cells), while the puddle's
+    # particles lie 0.6 of a cell over the domain's floor and our surface reaches down to it. Cut where Mantaflow's
+    # mesh ends, ours is within 5 % (docs/addon.md: the splash, frame by frame).
+    reference = mantaflow_volumes(bakes, "splash")
+    inset = 0.8 * CELL
+    for frame in (16, 24):
+        theirs = np.asarray(meniscus.read_mesh(bakes / f"splash_UNI/cache/mesh/fluid_mesh_{frame:04d}.bobj.gz").vertices)
+        assert theirs[:, 2].min() > 0.75 * CELL and np.abs(theirs[:, :2]).max() < 1.0 - 0.75 * CELL
+        ours = reconstruct_frame(bakes, "splash", frame)
+        assert ours.stats["counts"]["interior_fill_particles"] == 0
+        assert np.asarray(ours.vertices)[:, 2].min() < 0.25 * CELL
+        cut = reconstruct_frame(bakes, "splash", frame, mesh_aabb_min=[-1 + inset, -1 + inset, inset],
+                                mesh_aabb_max=[1 - inset, 1 - inset, 1.5 - inset])
+        assert abs(volume(cut) / reference[frame] - 1.0) <= 0.05, (frame, volume(cut) / reference[frame])
+
+
 def test_a_bad_fluid_domain_is_refused_by_name(bakes):
     particles = meniscus.read_particles(bakes / "pool_UNI/cache/data/pp_0005.uni")
     with pytest.raises(ValueError, match=r"fluid_domain\['resolution'\]"):
