@@ -151,9 +151,11 @@ TEST_CASE("a thin jet over a dry floor is not filled underneath", "[interior_fil
 TEST_CASE("a wide thin sheet a few cells over a dry floor raises no pillar of water under it", "[interior_fill]") {
     const FluidDomain domain = closed_domain(24);
     // A sheet two cells thick (all band: thinner than two bands), 2 cells of air between its shell and the floor's
-    // wall layer, far wider than high: in the middle, against one wall, in a corner, from wall to wall.
+    // wall layer, far wider than high: in the middle, against one wall, in a corner, from wall to wall, against
+    // three walls.
     struct Sheet { double x0, x1, y0, y1; };
-    const Sheet sheet = GENERATE(Sheet{3, 21, 3, 21}, Sheet{1, 16, 4, 20}, Sheet{1, 14, 1, 14}, Sheet{1, 23, 8, 16});
+    const Sheet sheet = GENERATE(Sheet{3, 21, 3, 21}, Sheet{1, 16, 4, 20}, Sheet{1, 14, 1, 14}, Sheet{1, 23, 8, 16},
+                                 Sheet{1, 23, 1, 14});
     const double bottom = GENERATE(4.0, 5.0);
     CAPTURE(sheet.x0, sheet.x1, sheet.y0, sheet.y1, bottom);
     const std::vector<float> particles = particles_where(24, [&](double x, double y, double z) {
@@ -164,6 +166,18 @@ TEST_CASE("a wide thin sheet a few cells over a dry floor raises no pillar of wa
     for (int k = 1; k < int(bottom) - 1; ++k) CHECK(at(c, i, j, k) == CellClass::air);
     CHECK(c.count(CellClass::liquid) == 0);
     CHECK(fill_interior(view(particles), domain, 0.5 * kCell, 2, 0).source.empty());
+}
+
+TEST_CASE("a pool beside a step along a wall that nobody described is still filled", "[interior_fill]") {
+    const FluidDomain domain = closed_domain(24);
+    // A step from wall to wall in x, 5 cells deep in y, up to cell 16: no particles in it; the pool's band elsewhere.
+    const auto in_step = [](double, double y, double z) { return y < 6 && z < 16; };
+    const std::vector<float> particles = particles_where(24, [&](double x, double y, double z) { return pool_band(x, y, z) && !in_step(x, y, z); });
+    const InteriorClassification c = classify_interior(view(particles), domain, 2);
+    for (int k = 1; k <= 7; ++k) CHECK(at(c, 12, 14, k) == CellClass::liquid);
+    CHECK(at(c, 3, 20, 2) == CellClass::liquid);
+    CHECK(at(c, 12, 3, 4) == CellClass::air);  // the step's cells
+    CHECK(c.count(CellClass::liquid) >= std::size_t(22 * 16 * 7));
 }
 
 TEST_CASE("an obstacle sticking out of a pool: solid when described, and the pool is filled either way", "[interior_fill]") {

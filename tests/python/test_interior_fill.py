@@ -145,7 +145,7 @@ def box_triangles(centre, edge):
     return np.array([corners[[f[0], f[1 + t], f[2 + t]]] for f in faces for t in (0, 1)], dtype=np.float32)
 
 
-def test_a_submerged_obstacle_is_left_empty_when_described(bakes):
+def test_a_submerged_obstacle_is_left_empty_described_or_not(bakes):
     # The moving obstacle's 0.4 m box under water at frame 20; bake_scene.py keys it from (0.6, -0.5) at frame 1 to
     # (-0.6, 0.5) at frame 24 with Blender's default easing (3u^2 - 2u^3).
     frame = 20
@@ -154,15 +154,17 @@ def test_a_submerged_obstacle_is_left_empty_when_described(bakes):
     centre = np.array([0.6 - 1.2 * ease, -0.5 + 1.0 * ease, 0.25])
     particles = meniscus.read_particles(bakes / f"moving_obstacle_UNI/cache/data/pp_{frame:04d}.uni")
     domain = narrow_band(particles)
-    unknown = meniscus.reconstruct(particles.positions, CELL / 2, fluid_domain=domain, **SETTINGS)
-    # From the cache alone the box's cells look like water under the surface: filled.
-    assert winding_numbers(unknown, [centre])[0] > 0.5
     described = meniscus.reconstruct(particles.positions, CELL / 2, fluid_domain={**domain, "obstacles": [box_triangles(centre, 0.4)]},
                                      **SETTINGS)
     assert winding_numbers(described, [centre])[0] < 0.5
+    # From the cache alone: the water over the box's top (0.45 m, the pool about as deep) is thinner than the band,
+    # and no particle lies in the box's cells, where the band would reach were they water: left empty too (it was
+    # filled as water before the fill judged the depth of particles over such cells).
+    unknown = meniscus.reconstruct(particles.positions, CELL / 2, fluid_domain=domain, **SETTINGS)
+    assert winding_numbers(unknown, [centre])[0] < 0.5
     reference = mantaflow_volumes(bakes, "moving_obstacle")[frame]
     assert abs(volume(described) / reference - 1.0) <= 0.05
-    assert volume(unknown) - volume(described) == pytest.approx(0.4 ** 3, rel=0.35)
+    assert abs(volume(unknown) - volume(described)) < 0.1 * 0.4 ** 3
 
 
 def test_the_filled_surface_is_the_same_for_every_thread_count(bakes):

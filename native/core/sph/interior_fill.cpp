@@ -23,6 +23,8 @@ constexpr int kMaxPointsPerEdge = 8;
 // In shell cells a lattice point is added only this many lattice spacings or further from every particle: it fills
 // the band's gaps, but a particle of the band at its rest spacing keeps the lattice points around it away.
 constexpr double kKeepAway = 0.75;
+// The fewest columns under a cover whose depth in particles tells a sheet from a band (see the column votes).
+constexpr std::size_t kMinThinCoverColumns = 4;
 
 using Vec3 = std::array<double, 3>;
 using Mat3 = std::array<Vec3, 3>;  // rows
@@ -322,10 +324,13 @@ InteriorClassification classify_interior(const PositionsView& positions, const F
     std::vector<CellClass>& cells = out.cells;
     cells.assign(static_cast<std::size_t>(grid.cells), CellClass::air);
 
-    // Shell: the cells within reach of a particle.
+    // Shell: the cells within reach of a particle. Held: the cells a particle lies in.
+    std::vector<uint8_t> held(static_cast<std::size_t>(grid.cells), 0);
     for (std::size_t p = 0; p < positions.count; ++p) {
         const Vec3 g = map.grid({positions.coord(p, 0), positions.coord(p, 1), positions.coord(p, 2)});
         if (!(std::isfinite(g[0]) && std::isfinite(g[1]) && std::isfinite(g[2]))) continue;
+        if (g[0] >= 0.0 && g[0] < grid.n[0] && g[1] >= 0.0 && g[1] < grid.n[1] && g[2] >= 0.0 && g[2] < grid.n[2])
+            held[grid.index(int(g[0]), int(g[1]), int(g[2]))] = 1;
         std::array<int, 3> lo{}, hi{};
         bool outside = false;
         for (int a = 0; a < 3; ++a) {
@@ -384,15 +389,22 @@ InteriorClassification classify_interior(const PositionsView& positions, const F
     // grid's edge: air under a drop or sheet wider than its height over the floor, open all round or on two sides
     // in a corner (the first rule alone would take it for a pool and raise a pillar of water under it). Water held
     // by an obstacle nobody described borders that obstacle's cells (which look like air) only along the
-    // obstacle's sides, and the domain's walls elsewhere.
+    // obstacle's sides, and the domain's walls elsewhere. And so is a group under a sheet thinner than the band: the
+    // solver keeps particles band_width_cells deep under every free surface, so over water the cells holding
+    // particles run that deep above it (deeper where the surface slopes); in most of the group's columns fewer
+    // (the median, half a cell of slack) is a sheet with air under it, whatever walls stand around it. Not judged
+    // under fewer columns than kMinThinCoverColumns: one or two columns of a jittered band say too little, and the
+    // region around them takes its class from their vote.
     {
         std::vector<int32_t> group(static_cast<std::size_t>(grid.cells), -1);
         std::vector<int64_t> members, stack;
+        std::vector<int> held_above;  // per covered column of the group: the cells holding particles in the shell above
         const int64_t up_step = up_positive ? grid.stride[up_axis] : -grid.stride[up_axis];
         int32_t groups = 0;
         for (int64_t seed = 0; seed < grid.cells; ++seed) {
             if (votes[seed] != kLiquid || group[seed] >= 0) continue;
             members.clear();
+            held_above.clear();
             stack.assign(1, seed);
             group[seed] = groups;
             int64_t open_faces = 0, covered_faces = 0, open_sides = 0, bounded_sides = 0;
@@ -402,7 +414,16 @@ InteriorClassification classify_interior(const PositionsView& positions, const F
                 members.push_back(cell);
                 const std::array<int, 3> c = grid.coords(cell);
                 const int up = c[up_axis] + (up_positive ? 1 : -1);
-                if (up >= 0 && up < grid.n[up_axis] && cells[cell + up_step] == CellClass::shell) ++covered_faces;
+                if (up >= 0 && up < grid.n[up_axis] && cells[cell + up_step] == CellClass::shell) {
+                    ++covered_faces;
+                    int run = 0;
+                    int64_t above = cell + up_step;
+                    for (int h = up; h >= 0 && h < grid.n[up_axis] && cells[above] == CellClass::shell; h += up_positive ? 1 : -1) {
+                        run += held[above];
+                        above += up_step;
+                    }
+                    held_above.push_back(run);
+                }
                 for (int a = 0; a < 3; ++a) {
                     if (a == up_axis) continue;
                     for (int dir = -1; dir <= 1; dir += 2) {
@@ -425,7 +446,12 @@ InteriorClassification classify_interior(const PositionsView& positions, const F
                 });
             }
             ++groups;
-            if (open_faces > covered_faces || 2 * open_sides > bounded_sides)
+            bool thin_cover = false;
+            if (held_above.size() >= kMinThinCoverColumns && domain.band_width_cells > 0.0) {
+                std::nth_element(held_above.begin(), held_above.begin() + held_above.size() / 2, held_above.end());
+                thin_cover = held_above[held_above.size() / 2] + 0.5 < domain.band_width_cells;
+            }
+            if (open_faces > covered_faces || 2 * open_sides > bounded_sides || thin_cover)
                 for (int64_t cell : members) votes[cell] = kAir;
         }
     }
