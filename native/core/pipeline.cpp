@@ -48,33 +48,40 @@ bool wants_fill(const PipelineOptions& options) {
 void fill_narrow_band(const PositionsView& positions, const std::vector<AttributeInput>& attributes, const PipelineOptions& options,
                       FilledParticles& out, PipelineStats& stats) {
     StageTimer timer(&stats, "interior fill");
-    const InteriorFill fill = fill_interior(positions, *options.fluid_domain, 2.0 * options.reconstruction.particle_radius,
-                                            options.execution.threads, options.execution.memory_budget_bytes());
+    InteriorFill fill = fill_interior(positions, *options.fluid_domain, 2.0 * options.reconstruction.particle_radius,
+                                      options.execution.threads, options.execution.memory_budget_bytes());
     const std::size_t n = positions.count, added = fill.source.size();
+    const InteriorClassification& cells = fill.classification;
+    stats.set_count("interior_fill_particles", static_cast<double>(added));
+    stats.set_count("interior_fill_liquid_cells", static_cast<double>(cells.count(CellClass::liquid)));
+    stats.set_count("interior_fill_shell_cells", static_cast<double>(cells.count(CellClass::shell)));
+    stats.set_count("interior_fill_regions_split", static_cast<double>(cells.split_components));
+    // Each of the fill's arrays is released as soon as it is copied: at resolution 512 they are gigabytes.
+    std::vector<CellClass>().swap(fill.classification.cells);
     if (positions.f64) {
+        out.f64.reserve(3 * (n + added));
         out.f64.assign(positions.f64, positions.f64 + 3 * n);
         out.f64.insert(out.f64.end(), fill.positions.begin(), fill.positions.end());
         out.view = PositionsView(out.f64.data(), n + added);
     } else {
+        out.f32.reserve(3 * (n + added));
         out.f32.assign(positions.f32, positions.f32 + 3 * n);
         out.f32.insert(out.f32.end(), fill.positions.begin(), fill.positions.end());
         out.view = PositionsView(out.f32.data(), n + added);
     }
+    std::vector<float>().swap(fill.positions);
     out.attribute_values.reserve(attributes.size());
     for (const AttributeInput& a : attributes) {
         const std::size_t k = static_cast<std::size_t>(a.components);
-        std::vector<float> values(a.values, a.values + k * n);
+        std::vector<float> values;
+        values.reserve(k * (n + added));
+        values.assign(a.values, a.values + k * n);
         values.resize(k * (n + added));
         for (std::size_t f = 0; f < added; ++f)
             std::copy(a.values + k * fill.source[f], a.values + k * (fill.source[f] + 1), values.begin() + k * (n + f));
         out.attribute_values.push_back(std::move(values));
         out.attributes.push_back({a.name, out.attribute_values.back().data(), a.components, a.integral});
     }
-    const InteriorClassification& cells = fill.classification;
-    stats.set_count("interior_fill_particles", static_cast<double>(added));
-    stats.set_count("interior_fill_liquid_cells", static_cast<double>(cells.count(CellClass::liquid)));
-    stats.set_count("interior_fill_shell_cells", static_cast<double>(cells.count(CellClass::shell)));
-    stats.set_count("interior_fill_regions_split", static_cast<double>(cells.split_components));
 }
 
 }  // namespace

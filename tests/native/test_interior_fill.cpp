@@ -2,9 +2,11 @@
 // hand-made shells shaped like Mantaflow's narrow band (2 x 2 x 2 jittered particles per cell, 3 cells deep).
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <initializer_list>
 #include <limits>
 #include <vector>
 
@@ -146,6 +148,38 @@ TEST_CASE("a thin jet over a dry floor is not filled underneath", "[interior_fil
     CHECK(fill_interior(view(particles), domain, 0.5 * kCell, 2, 0).source.empty());
 }
 
+TEST_CASE("a wide thin sheet a few cells over a dry floor raises no pillar of water under it", "[interior_fill]") {
+    const FluidDomain domain = closed_domain(24);
+    // A sheet two cells thick (all band: thinner than two bands), 2 cells of air between its shell and the floor's
+    // wall layer, far wider than high: in the middle, against one wall, in a corner, from wall to wall, against
+    // three walls.
+    struct Sheet { double x0, x1, y0, y1; };
+    const Sheet sheet = GENERATE(Sheet{3, 21, 3, 21}, Sheet{1, 16, 4, 20}, Sheet{1, 14, 1, 14}, Sheet{1, 23, 8, 16},
+                                 Sheet{1, 23, 1, 14});
+    const double bottom = GENERATE(4.0, 5.0);
+    CAPTURE(sheet.x0, sheet.x1, sheet.y0, sheet.y1, bottom);
+    const std::vector<float> particles = particles_where(24, [&](double x, double y, double z) {
+        return x > sheet.x0 && x < sheet.x1 && y > sheet.y0 && y < sheet.y1 && z > bottom && z < bottom + 2;
+    });
+    const InteriorClassification c = classify_interior(view(particles), domain, 2);
+    const int i = int((sheet.x0 + sheet.x1) / 2), j = int((sheet.y0 + sheet.y1) / 2);
+    for (int k = 1; k < int(bottom) - 1; ++k) CHECK(at(c, i, j, k) == CellClass::air);
+    CHECK(c.count(CellClass::liquid) == 0);
+    CHECK(fill_interior(view(particles), domain, 0.5 * kCell, 2, 0).source.empty());
+}
+
+TEST_CASE("a pool beside a step along a wall that nobody described is still filled", "[interior_fill]") {
+    const FluidDomain domain = closed_domain(24);
+    // A step from wall to wall in x, 5 cells deep in y, up to cell 16: no particles in it; the pool's band elsewhere.
+    const auto in_step = [](double, double y, double z) { return y < 6 && z < 16; };
+    const std::vector<float> particles = particles_where(24, [&](double x, double y, double z) { return pool_band(x, y, z) && !in_step(x, y, z); });
+    const InteriorClassification c = classify_interior(view(particles), domain, 2);
+    for (int k = 1; k <= 7; ++k) CHECK(at(c, 12, 14, k) == CellClass::liquid);
+    CHECK(at(c, 3, 20, 2) == CellClass::liquid);
+    CHECK(at(c, 12, 3, 4) == CellClass::air);  // the step's cells
+    CHECK(c.count(CellClass::liquid) >= std::size_t(22 * 16 * 7));
+}
+
 TEST_CASE("an obstacle sticking out of a pool: solid when described, and the pool is filled either way", "[interior_fill]") {
     FluidDomain domain = closed_domain(24);
     // Pool band as above; a box obstacle from cell 6 to 12 in x and y, floor to cell 16 in z: no particles in it.
@@ -178,6 +212,51 @@ TEST_CASE("an obstacle sticking out of a pool: solid when described, and the poo
         CHECK(at(c, 18, 18, 4) == CellClass::liquid);
         CHECK(c.split_components == 0);
     }
+}
+
+// The 2 triangles of each listed face of the box from lo to hi (cells), world space: faces 0..5 are -z, +z, -y, +y,
+// -x, +x.
+std::vector<float> box_faces(const std::array<double, 3>& lo, const std::array<double, 3>& hi, std::initializer_list<int> which) {
+    const int faces[6][4] = {{0, 1, 3, 2}, {4, 6, 7, 5}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 5, 7, 3}};
+    const auto corner = [&](int v, int a) { return float(((v >> a) & 1 ? hi[a] : lo[a]) * kCell); };
+    std::vector<float> soup;
+    for (int f : which)
+        for (int t : {0, 1}) {
+            const int tri[3] = {faces[f][0], faces[f][1 + t], faces[f][2 + t]};
+            for (int v : tri) soup.insert(soup.end(), {corner(v, 0), corner(v, 1), corner(v, 2)});
+        }
+    return soup;
+}
+
+TEST_CASE("a single-sided plane obstacle gives solid cells where it lies", "[interior_fill]") {
+    FluidDomain domain = closed_domain(24);
+    domain.obstacles.push_back(box_faces({4.5, 4.5, 6.4}, {19.5, 19.5, 6.4}, {0}));  // a horizontal square over 16 x 16 cells
+    const std::vector<float> particles = particles_where(24, pool_band);
+    const InteriorClassification c = classify_interior(view(particles), domain, 2);
+    for (int i = 4; i < 20; ++i) CHECK(at(c, i, 12, 6) == CellClass::solid);
+    CHECK(at(c, 12, 12, 5) != CellClass::solid);
+    CHECK(at(c, 12, 12, 7) == CellClass::liquid);
+    CHECK(at(c, 2, 12, 6) == CellClass::liquid);  // beside it, the pool
+    CHECK(c.count(CellClass::solid) == std::size_t(24 * 24 * 24 - 22 * 22 * 22 + 16 * 16));
+}
+
+TEST_CASE("water in an open box obstacle is held by its walls and filled, the dry floor around it is not", "[interior_fill]") {
+    FluidDomain domain = closed_domain(24);
+    // A box without a lid from the floor's wall layer up to cell 14; water up to cell 12 in it, its band in the top 3
+    // cells; nothing outside it. Its walls, single planes, would otherwise let the water's cells see the dry floor.
+    domain.obstacles.push_back(box_faces({6.2, 6.2, 1.2}, {17.8, 17.8, 14}, {0, 2, 3, 4, 5}));
+    const std::vector<float> particles = particles_where(24, [](double x, double y, double z) {
+        return x > 7 && x < 17 && y > 7 && y < 17 && pool_band(x, y, z);
+    });
+    const InteriorClassification c = classify_interior(view(particles), domain, 2);
+    for (int k = 2; k <= 7; ++k) CHECK(at(c, 12, 12, k) == CellClass::liquid);
+    CHECK(at(c, 6, 12, 4) == CellClass::solid);
+    CHECK(at(c, 17, 12, 4) == CellClass::solid);
+    CHECK(at(c, 12, 12, 1) == CellClass::solid);
+    CHECK(at(c, 3, 3, 4) == CellClass::air);
+    CHECK(at(c, 20, 12, 2) == CellClass::air);
+    CHECK(at(c, 12, 12, 16) == CellClass::air);
+    CHECK(c.count(CellClass::liquid) >= std::size_t(10 * 10 * 6));
 }
 
 TEST_CASE("the fill is the same for every thread count", "[interior_fill][threads]") {

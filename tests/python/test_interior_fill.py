@@ -109,6 +109,24 @@ def test_a_thin_jet_is_not_filled(bakes):
         assert volume(filled) == pytest.approx(volume(reconstruct_frame(bakes, "splash", frame, fill_interior=0)), rel=1e-9)
 
 
+def test_the_landed_splash_overshoots_only_into_the_floors_wall_cells(bakes):
+    # After the jet lands (frames 13-24) ours encloses 1.01-1.20 of Mantaflow's volume with nothing filled: Mantaflow's
+    # mesh ends 0.8 of a cell inside the domain on every closed side (in its layer of wall cells), while the puddle's
+    # particles lie 0.6 of a cell over the domain's floor and our surface reaches down to it. Cut where Mantaflow's
+    # mesh ends, ours is within 5 % (docs/addon.md: the splash, frame by frame).
+    reference = mantaflow_volumes(bakes, "splash")
+    inset = 0.8 * CELL
+    for frame in (16, 24):
+        theirs = np.asarray(meniscus.read_mesh(bakes / f"splash_UNI/cache/mesh/fluid_mesh_{frame:04d}.bobj.gz").vertices)
+        assert theirs[:, 2].min() > 0.75 * CELL and np.abs(theirs[:, :2]).max() < 1.0 - 0.75 * CELL
+        ours = reconstruct_frame(bakes, "splash", frame)
+        assert ours.stats["counts"]["interior_fill_particles"] == 0
+        assert np.asarray(ours.vertices)[:, 2].min() < 0.25 * CELL
+        cut = reconstruct_frame(bakes, "splash", frame, mesh_aabb_min=[-1 + inset, -1 + inset, inset],
+                                mesh_aabb_max=[1 - inset, 1 - inset, 1.5 - inset])
+        assert abs(volume(cut) / reference[frame] - 1.0) <= 0.05, (frame, volume(cut) / reference[frame])
+
+
 def test_a_bad_fluid_domain_is_refused_by_name(bakes):
     particles = meniscus.read_particles(bakes / "pool_UNI/cache/data/pp_0005.uni")
     with pytest.raises(ValueError, match=r"fluid_domain\['resolution'\]"):
@@ -127,7 +145,7 @@ def box_triangles(centre, edge):
     return np.array([corners[[f[0], f[1 + t], f[2 + t]]] for f in faces for t in (0, 1)], dtype=np.float32)
 
 
-def test_a_submerged_obstacle_is_left_empty_when_described(bakes):
+def test_a_submerged_obstacle_is_left_empty_described_or_not(bakes):
     # The moving obstacle's 0.4 m box under water at frame 20; bake_scene.py keys it from (0.6, -0.5) at frame 1 to
     # (-0.6, 0.5) at frame 24 with Blender's default easing (3u^2 - 2u^3).
     frame = 20
@@ -136,15 +154,17 @@ def test_a_submerged_obstacle_is_left_empty_when_described(bakes):
     centre = np.array([0.6 - 1.2 * ease, -0.5 + 1.0 * ease, 0.25])
     particles = meniscus.read_particles(bakes / f"moving_obstacle_UNI/cache/data/pp_{frame:04d}.uni")
     domain = narrow_band(particles)
-    unknown = meniscus.reconstruct(particles.positions, CELL / 2, fluid_domain=domain, **SETTINGS)
-    # From the cache alone the box's cells look like water under the surface: filled.
-    assert winding_numbers(unknown, [centre])[0] > 0.5
     described = meniscus.reconstruct(particles.positions, CELL / 2, fluid_domain={**domain, "obstacles": [box_triangles(centre, 0.4)]},
                                      **SETTINGS)
     assert winding_numbers(described, [centre])[0] < 0.5
+    # From the cache alone: the water over the box's top (0.45 m, the pool about as deep) is thinner than the band,
+    # and no particle lies in the box's cells, where the band would reach were they water: left empty too (it was
+    # filled as water before the fill judged the depth of particles over such cells).
+    unknown = meniscus.reconstruct(particles.positions, CELL / 2, fluid_domain=domain, **SETTINGS)
+    assert winding_numbers(unknown, [centre])[0] < 0.5
     reference = mantaflow_volumes(bakes, "moving_obstacle")[frame]
     assert abs(volume(described) / reference - 1.0) <= 0.05
-    assert volume(unknown) - volume(described) == pytest.approx(0.4 ** 3, rel=0.35)
+    assert abs(volume(unknown) - volume(described)) < 0.1 * 0.4 ** 3
 
 
 def test_the_filled_surface_is_the_same_for_every_thread_count(bakes):

@@ -23,6 +23,8 @@ constexpr int kMaxPointsPerEdge = 8;
 // In shell cells a lattice point is added only this many lattice spacings or further from every particle: it fills
 // the band's gaps, but a particle of the band at its rest spacing keeps the lattice points around it away.
 constexpr double kKeepAway = 0.75;
+// The fewest columns under a cover whose depth in particles tells a sheet from a band (see the column votes).
+constexpr std::size_t kMinThinCoverColumns = 4;
 
 using Vec3 = std::array<double, 3>;
 using Mat3 = std::array<Vec3, 3>;  // rows
@@ -108,11 +110,92 @@ void spread(const Grid& grid, std::vector<int64_t>& queue, std::vector<T>& value
 
 std::string field(const char* name) { return std::string("fluid_domain.") + name; }
 
-// Obstacles (closed triangle soups, world space) -> solid cells: a cell is inside when its centre is, by the parity
-// of the crossings along the grid's third axis.
+// Whether every edge of the soup is shared by an even number of its triangles (corners matched exactly: a mesh's
+// triangles share their corners' world coordinates): a closed surface, whose inside parity can tell.
+bool closed_soup(const std::vector<float>& soup) {
+    using Corner = std::array<float, 3>;
+    std::vector<std::pair<Corner, Corner>> edges;
+    edges.reserve(soup.size() / 3);
+    for (std::size_t t = 0; t + 9 <= soup.size(); t += 9)
+        for (int e = 0; e < 3; ++e) {
+            const std::size_t a = t + 3 * e, b = t + 3 * ((e + 1) % 3);
+            Corner p{soup[a], soup[a + 1], soup[a + 2]}, q{soup[b], soup[b + 1], soup[b + 2]};
+            if (q < p) std::swap(p, q);
+            edges.emplace_back(p, q);
+        }
+    std::sort(edges.begin(), edges.end());
+    for (std::size_t s = 0; s < edges.size();) {
+        std::size_t e = s;
+        while (e < edges.size() && edges[e] == edges[s]) ++e;
+        if ((e - s) % 2 != 0) return false;
+        s = e;
+    }
+    return !edges.empty();
+}
+
+// Whether the triangle (grid coordinates) meets the closed unit cell at `lo`, by the separating axis test: the
+// cell's three axes, the triangle's normal and the nine cross products of its edges with the cell's axes.
+bool triangle_meets_cell(const std::array<Vec3, 3>& p, const std::array<int, 3>& lo) {
+    std::array<Vec3, 3> v;
+    for (int c = 0; c < 3; ++c)
+        for (int a = 0; a < 3; ++a) v[c][a] = p[c][a] - (lo[a] + 0.5);
+    const auto cross = [](const Vec3& a, const Vec3& b) { return Vec3{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]}; };
+    const auto separates = [&](const Vec3& axis) {
+        const double radius = 0.5 * (std::fabs(axis[0]) + std::fabs(axis[1]) + std::fabs(axis[2]));
+        double lo_p = std::numeric_limits<double>::infinity(), hi_p = -lo_p;
+        for (const Vec3& q : v) {
+            const double d = q[0] * axis[0] + q[1] * axis[1] + q[2] * axis[2];
+            lo_p = std::min(lo_p, d);
+            hi_p = std::max(hi_p, d);
+        }
+        return lo_p > radius || hi_p < -radius;  // a zero axis never separates
+    };
+    const std::array<Vec3, 3> edge{Vec3{v[1][0] - v[0][0], v[1][1] - v[0][1], v[1][2] - v[0][2]},
+                                   Vec3{v[2][0] - v[1][0], v[2][1] - v[1][1], v[2][2] - v[1][2]},
+                                   Vec3{v[0][0] - v[2][0], v[0][1] - v[2][1], v[0][2] - v[2][2]}};
+    for (int a = 0; a < 3; ++a) {
+        Vec3 unit{0.0, 0.0, 0.0};
+        unit[a] = 1.0;
+        if (separates(unit)) return false;
+        for (const Vec3& e : edge)
+            if (separates(cross(e, unit))) return false;
+    }
+    return !separates(cross(edge[0], edge[1]));
+}
+
+// The cells an open soup's triangles meet (a plane, an open box, a mesh with holes): parity cannot tell its inside,
+// and a single-sided wall holds water all the same. The cells form a layer that no face-to-face path crosses.
+void voxelize_surface(const std::vector<float>& soup, const GridMap& map, const Grid& grid, std::vector<CellClass>& cells) {
+    for (std::size_t t = 0; t + 9 <= soup.size(); t += 9) {
+        std::array<Vec3, 3> p;
+        for (int c = 0; c < 3; ++c) p[c] = map.grid({soup[t + 3 * c], soup[t + 3 * c + 1], soup[t + 3 * c + 2]});
+        std::array<int, 3> lo{}, hi{};
+        bool outside = false;
+        for (int a = 0; a < 3; ++a) {
+            // Clamped to the grid before the conversion to int: an obstacle far outside must not overflow it.
+            const double low = std::min({p[0][a], p[1][a], p[2][a]}), high = std::max({p[0][a], p[1][a], p[2][a]});
+            lo[a] = int(std::clamp(std::floor(low), 0.0, double(grid.n[a])));
+            hi[a] = int(std::clamp(std::floor(high), -1.0, double(grid.n[a] - 1)));
+            outside = outside || lo[a] > hi[a];
+        }
+        if (outside) continue;
+        for (int k = lo[2]; k <= hi[2]; ++k)
+            for (int j = lo[1]; j <= hi[1]; ++j)
+                for (int i = lo[0]; i <= hi[0]; ++i)
+                    if (triangle_meets_cell(p, {i, j, k})) cells[grid.index(i, j, k)] = CellClass::solid;
+    }
+}
+
+// Obstacles (triangle soups, world space) -> solid cells. A closed soup: a cell is inside when its centre is, by the
+// parity of the crossings along the grid's third axis (the cells its surface only grazes stay water, so the water
+// reaches the obstacle). An open soup: the cells its triangles meet.
 void voxelize_obstacles(const FluidDomain& domain, const GridMap& map, const Grid& grid, std::vector<CellClass>& cells) {
     std::vector<std::pair<int64_t, double>> crossings;  // (column i + nx j, height in cells)
     for (const std::vector<float>& soup : domain.obstacles) {
+        if (!closed_soup(soup)) {
+            voxelize_surface(soup, map, grid, cells);
+            continue;
+        }
         for (std::size_t t = 0; t + 9 <= soup.size(); t += 9) {
             std::array<Vec3, 3> p;
             for (int c = 0; c < 3; ++c) p[c] = map.grid({soup[t + 3 * c], soup[t + 3 * c + 1], soup[t + 3 * c + 2]});
@@ -241,10 +324,13 @@ InteriorClassification classify_interior(const PositionsView& positions, const F
     std::vector<CellClass>& cells = out.cells;
     cells.assign(static_cast<std::size_t>(grid.cells), CellClass::air);
 
-    // Shell: the cells within reach of a particle.
+    // Shell: the cells within reach of a particle. Held: the cells a particle lies in.
+    std::vector<uint8_t> held(static_cast<std::size_t>(grid.cells), 0);
     for (std::size_t p = 0; p < positions.count; ++p) {
         const Vec3 g = map.grid({positions.coord(p, 0), positions.coord(p, 1), positions.coord(p, 2)});
         if (!(std::isfinite(g[0]) && std::isfinite(g[1]) && std::isfinite(g[2]))) continue;
+        if (g[0] >= 0.0 && g[0] < grid.n[0] && g[1] >= 0.0 && g[1] < grid.n[1] && g[2] >= 0.0 && g[2] < grid.n[2])
+            held[grid.index(int(g[0]), int(g[1]), int(g[2]))] = 1;
         std::array<int, 3> lo{}, hi{};
         bool outside = false;
         for (int a = 0; a < 3; ++a) {
@@ -298,26 +384,59 @@ InteriorClassification classify_interior(const PositionsView& positions, const F
 
     // Every boundary between liquid and air is a free surface, which carries the band's particles. A group of liquid
     // votes that borders air votes directly over more faces than it has shell above it is air under something
-    // airborne (a jet or a drop over a dry floor), not water: its sides would need walls. Water held by an obstacle
-    // nobody described borders that obstacle's cells (which look like air) only along the obstacle's sides.
+    // airborne (a jet or a drop over a dry floor), not water: its sides would need walls. So is a group whose sides
+    // border air votes over more than a third of the faces they share with air votes, walls, obstacles, shell and the
+    // grid's edge: air under a drop or sheet wider than its height over the floor, open all round or on two sides
+    // in a corner (the first rule alone would take it for a pool and raise a pillar of water under it). Water held
+    // by an obstacle nobody described borders that obstacle's cells (which look like air) only along the
+    // obstacle's sides, and the domain's walls elsewhere. And so is a group under a sheet thinner than the band: the
+    // solver keeps particles band_width_cells deep under every free surface, so over water the cells holding
+    // particles run that deep above it (deeper where the surface slopes); in most of the group's columns fewer
+    // (the median, half a cell of slack) is a sheet with air under it, whatever walls stand around it. Not judged
+    // under fewer columns than kMinThinCoverColumns: one or two columns of a jittered band say too little, and the
+    // region around them takes its class from their vote.
     {
         std::vector<int32_t> group(static_cast<std::size_t>(grid.cells), -1);
         std::vector<int64_t> members, stack;
+        std::vector<int> held_above;  // per covered column of the group: the cells holding particles in the shell above
         const int64_t up_step = up_positive ? grid.stride[up_axis] : -grid.stride[up_axis];
         int32_t groups = 0;
         for (int64_t seed = 0; seed < grid.cells; ++seed) {
             if (votes[seed] != kLiquid || group[seed] >= 0) continue;
             members.clear();
+            held_above.clear();
             stack.assign(1, seed);
             group[seed] = groups;
-            int64_t open_faces = 0, covered_faces = 0;
+            int64_t open_faces = 0, covered_faces = 0, open_sides = 0, bounded_sides = 0;
             while (!stack.empty()) {
                 const int64_t cell = stack.back();
                 stack.pop_back();
                 members.push_back(cell);
                 const std::array<int, 3> c = grid.coords(cell);
                 const int up = c[up_axis] + (up_positive ? 1 : -1);
-                if (up >= 0 && up < grid.n[up_axis] && cells[cell + up_step] == CellClass::shell) ++covered_faces;
+                if (up >= 0 && up < grid.n[up_axis] && cells[cell + up_step] == CellClass::shell) {
+                    ++covered_faces;
+                    int run = 0;
+                    int64_t above = cell + up_step;
+                    for (int h = up; h >= 0 && h < grid.n[up_axis] && cells[above] == CellClass::shell; h += up_positive ? 1 : -1) {
+                        run += held[above];
+                        above += up_step;
+                    }
+                    held_above.push_back(run);
+                }
+                for (int a = 0; a < 3; ++a) {
+                    if (a == up_axis) continue;
+                    for (int dir = -1; dir <= 1; dir += 2) {
+                        const int x = c[a] + dir;
+                        if (x < 0 || x >= grid.n[a]) {
+                            ++bounded_sides;
+                            continue;
+                        }
+                        const int64_t side = cell + dir * grid.stride[a];
+                        if (votes[side] == kAir) ++open_sides;
+                        else if (cells[side] == CellClass::shell || cells[side] == CellClass::solid) ++bounded_sides;
+                    }
+                }
                 for_each_face_neighbour(grid, cell, [&](int64_t next) {
                     if (next < 0) return;
                     if (votes[next] == kAir) ++open_faces;
@@ -327,7 +446,12 @@ InteriorClassification classify_interior(const PositionsView& positions, const F
                 });
             }
             ++groups;
-            if (open_faces > covered_faces)
+            bool thin_cover = false;
+            if (held_above.size() >= kMinThinCoverColumns && domain.band_width_cells > 0.0) {
+                std::nth_element(held_above.begin(), held_above.begin() + held_above.size() / 2, held_above.end());
+                thin_cover = held_above[held_above.size() / 2] + 0.5 < domain.band_width_cells;
+            }
+            if (open_faces > covered_faces || 2 * open_sides > bounded_sides || thin_cover)
                 for (int64_t cell : members) votes[cell] = kAir;
         }
     }
@@ -533,18 +657,15 @@ InteriorFill fill_interior(const PositionsView& positions, const FluidDomain& do
     std::vector<int64_t> fill_cells;
     for (int64_t cell = 0; cell < grid.cells; ++cell)
         if (is_fill_cell(cell)) fill_cells.push_back(cell);
-    check_memory_budget(double(fill_cells.size()) * per_cell * 2.0 * (12.0 + 4.0), memory_budget_bytes, "the interior fill's particles");
+    // Per fill cell its offset; per point its position and source, and the pipeline's copy of the position.
+    check_memory_budget(double(fill_cells.size()) * (8.0 + per_cell * (12.0 + 4.0 + 12.0)), memory_budget_bytes, "the interior fill's particles");
 
     const double keep_away2 = kKeepAway * kKeepAway * lattice_spacing * lattice_spacing;
-    std::vector<std::vector<float>> cell_points(fill_cells.size());
-    std::vector<std::vector<uint32_t>> cell_sources(fill_cells.size());
-    parallel_for(static_cast<int64_t>(fill_cells.size()), threads, [&](int64_t f) {
+    // Calls emit(world position, source particle) for each lattice point the fill cell keeps, in a fixed order.
+    const auto for_each_point = [&](int64_t f, auto&& emit) {
         const int64_t cell = fill_cells[f];
         const std::array<int, 3> c = grid.coords(cell);
         const bool shell = cells[cell] == CellClass::shell;
-        std::vector<float>& points = cell_points[f];
-        std::vector<uint32_t>& sources = cell_sources[f];
-        points.reserve(3 * static_cast<std::size_t>(per_cell));
         for (int z = 0; z < m[2]; ++z)
             for (int y = 0; y < m[1]; ++y)
                 for (int x = 0; x < m[0]; ++x) {
@@ -574,22 +695,35 @@ InteriorFill fill_interior(const PositionsView& positions, const FluidDomain& do
                                 }
                         if (nearest < keep_away2) continue;
                     }
-                    points.insert(points.end(), {float(w[0]), float(w[1]), float(w[2])});
-                    sources.push_back(source == kNoSource ? 0u : source);
+                    emit(w, source == kNoSource ? 0u : source);
                 }
+    };
+    // Counted per cell first, then written once into the output at each cell's offset: no per-cell buffers (at
+    // resolution 512 their headers and allocations cost more than the points) and no second copy of the points.
+    std::vector<std::size_t> offset(fill_cells.size() + 1, 0);
+    parallel_for(static_cast<int64_t>(fill_cells.size()), threads, [&](int64_t f) {
+        if (cells[fill_cells[f]] != CellClass::shell) {  // every point kept
+            offset[f + 1] = static_cast<std::size_t>(per_cell);
+            return;
+        }
+        std::size_t kept = 0;
+        for_each_point(f, [&](const Vec3&, uint32_t) { ++kept; });
+        offset[f + 1] = kept;
     }, 64);
-    std::size_t total = 0;
-    for (const auto& s : cell_sources) total += s.size();
-    out.positions.reserve(3 * total);
-    out.source.reserve(total);
-    for (std::size_t f = 0; f < fill_cells.size(); ++f) {
-        out.positions.insert(out.positions.end(), cell_points[f].begin(), cell_points[f].end());
-        out.source.insert(out.source.end(), cell_sources[f].begin(), cell_sources[f].end());
-    }
-    if (positions.count == 0) {  // nothing to take attributes from, and nothing was shell: nothing was filled
-        out.positions.clear();
-        out.source.clear();
-    }
+    for (std::size_t f = 0; f < fill_cells.size(); ++f) offset[f + 1] += offset[f];
+    const std::size_t total = positions.count == 0 ? 0 : offset.back();  // no particles: nothing to take attributes from
+    out.positions.resize(3 * total);
+    out.source.resize(total);
+    if (total > 0)
+        parallel_for(static_cast<int64_t>(fill_cells.size()), threads, [&](int64_t f) {
+            std::size_t o = offset[f];
+            for_each_point(f, [&](const Vec3& w, uint32_t source) {
+                out.positions[3 * o] = float(w[0]);
+                out.positions[3 * o + 1] = float(w[1]);
+                out.positions[3 * o + 2] = float(w[2]);
+                out.source[o++] = source;
+            });
+        }, 64);
     return out;
 }
 
