@@ -346,7 +346,9 @@ json run_frame(const ReconstructArgs& args, const std::string& input, const std:
     }
     const auto write_start = std::chrono::steady_clock::now();
     // The raw mesh first: with --skip-existing, the output's presence means the frame is complete.
-    const int write_threads = resolve_threads(args.parameters.execution.threads);  // the frame's share, as its pipeline
+    // The frame's share, as its pipeline took it (an automatic count: the cores other programs left free).
+    const int taken = static_cast<int>(result.stats.count("threads"));
+    const int write_threads = taken > 0 ? taken : resolve_threads(args.parameters.execution.threads);
     if (!raw_output.empty()) write_mesh_completely(result.raw_mesh, raw_output, write_threads);
     if (!output.empty()) write_mesh_completely(result.mesh, output, write_threads, provenance);
     result.stats.add_seconds("write", std::chrono::duration<double>(std::chrono::steady_clock::now() - write_start).count());

@@ -1,6 +1,9 @@
 // The portable layer (native/core/base): memory queries, UTF-8 paths and locale-independent decimal text. These run
 // in every build: Linux (GCC), Windows (mingw-w64 under Wine) and clang with libc++ (macOS's library).
 #include <catch2/catch.hpp>
+#include <atomic>
+#include <chrono>
+#include <thread>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -135,3 +138,23 @@ TEST_CASE("the automatic thread count leaves the cores that other programs hold"
     REQUIRE(taken >= 1);
     REQUIRE(taken <= resolve_threads(0));
 }
+
+#ifdef __linux__
+TEST_CASE("this process's own busy threads are told apart from other programs'", "[platform]") {
+    // Three threads spinning here are running or ready to run whatever the machine's load: with the caller, at least
+    // four of this process's own. They are in /proc/loadavg's count too, and must not take a frame's cores away.
+    std::atomic<bool> stop{false};
+    std::vector<std::thread> spinners;
+    for (int i = 0; i < 3; ++i)
+        spinners.emplace_back([&stop] {
+            while (!stop.load(std::memory_order_relaxed)) {
+            }
+        });
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    const int own = own_running_threads();
+    stop = true;
+    for (std::thread& spinner : spinners) spinner.join();
+    CHECK(own >= 4);
+    CHECK(own_running_threads() >= 1);  // the caller
+}
+#endif

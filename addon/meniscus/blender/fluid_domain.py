@@ -13,6 +13,8 @@ import bpy
 import numpy as np
 from mathutils import Euler, Matrix, Quaternion, Vector
 
+from . import sources
+
 # Mantaflow's particle files in <cache>/data/, by the domain's data format (Blender's fluid cache layout).
 _PARTICLE_FILES = {"UNI": "pp_{:04d}.uni", "OPENVDB": "fluid_data_{:04d}.vdb"}
 # Closed borders in FluidDomain's order (-x, +x, -y, +y, -z, +z): Blender's left/right are x, front/back y.
@@ -241,8 +243,10 @@ def _fcurves(obj):
     animation = obj.animation_data
     if animation is None or animation.action is None:
         return []
-    slot = getattr(animation, "action_slot", None)
-    if slot is not None:  # Blender 4.4+: a layered action keeps the F-curves of each animated object in a slot
+    if hasattr(animation, "action_slot"):  # Blender 4.4+: a layered action keeps each object's F-curves in a slot
+        slot = animation.action_slot
+        if slot is None:  # an action assigned without a slot animates nothing (5.x actions have no .fcurves)
+            return []
         from bpy_extras import anim_utils
         channels = anim_utils.action_get_channelbag_for_slot(animation.action, slot)
         return list(channels.fcurves) if channels is not None else []
@@ -324,7 +328,7 @@ def obstacle_triangles(obj, scene, depsgraph=None, frame=None):
     for candidate in candidates:
         if candidate == obj or candidate.type != "MESH" or not _is_collision_effector(candidate):
             continue
-        evaluated = candidate.evaluated_get(depsgraph) if depsgraph is not None else candidate
+        evaluated = sources.evaluated(candidate, depsgraph)
         matrix = _matrix_at_frame(candidate, evaluated, scene, frame, "Obstacle")
         mesh = evaluated.to_mesh()
         try:
@@ -350,7 +354,7 @@ def fluid_domain(obj, scene, depsgraph=None, placement=None, frame=None, scene_f
     `scene_frame` (default the current frame; column-major, as the cache's config keeps it)."""
     settings = domain_settings(obj)
     scene_frame = scene.frame_current if scene_frame is None else scene_frame
-    evaluated = obj.evaluated_get(depsgraph) if depsgraph is not None else obj
+    evaluated = sources.evaluated(obj, depsgraph)
     matrix = _matrix_at_frame(obj, evaluated, scene, scene_frame, "Fluid domain")
     domain = dict(placement or {})
     domain.update(

@@ -22,7 +22,10 @@ def digest(positions):
     return hashlib.blake2b(np.ascontiguousarray(positions).tobytes(), digest_size=16).hexdigest()
 
 
-def _evaluated(obj, depsgraph):
+def evaluated(obj, depsgraph):
+    """The object as evaluated (modifiers, shape keys, geometry nodes): what a frame change and a bake read. Without
+    a depsgraph (render_pre, a file just loaded, holding an earlier frame) the context's, so that every caller sees
+    the same geometry (a fluid domain's obstacles enter its surface's playback key and bake record)."""
     if depsgraph is None:
         try:
             depsgraph = bpy.context.evaluated_depsgraph_get()
@@ -87,17 +90,17 @@ def _to_world_vectors(vectors, matrix):
 
 def object_particles(source, depsgraph=None, wanted=()):
     """(positions (N, 3) float32 in world space, attributes by name, a word for what was read)."""
-    evaluated = _evaluated(source, depsgraph)
-    if len(evaluated.particle_systems):
-        from_systems = _particle_systems(evaluated)
+    source_evaluated = evaluated(source, depsgraph)
+    if len(source_evaluated.particle_systems):
+        from_systems = _particle_systems(source_evaluated)
         kind = f"{len(source.particle_systems)} particle system(s)"
         if from_systems is None:  # none born yet or all dead: the emitter's own mesh is not the fluid
             return np.empty((0, 3), dtype=np.float32), {}, kind
         positions, attributes = from_systems
         return np.ascontiguousarray(positions), attributes, kind
 
-    data = evaluated.data
-    matrix = evaluated.matrix_world
+    data = source_evaluated.data
+    matrix = source_evaluated.matrix_world
     if source.type == "POINTCLOUD":
         count = len(data.points)
         flat = np.empty(count * 3, dtype=np.float32)

@@ -9,8 +9,11 @@
 #include "base/parallel.h"
 
 #ifdef __linux__
+#include <dirent.h>
 #include <sched.h>
 #include <unistd.h>
+
+#include <cstring>
 #endif
 
 namespace meniscus {
@@ -48,6 +51,32 @@ int running_threads_now() {
 
 }  // namespace
 
+#ifdef __linux__
+int own_running_threads() {
+    DIR* tasks = opendir("/proc/self/task");
+    if (!tasks) return 0;
+    int running = 0;
+    while (const dirent* task = readdir(tasks)) {
+        if (task->d_name[0] < '0' || task->d_name[0] > '9') continue;
+        char path[64];
+        std::snprintf(path, sizeof path, "/proc/self/task/%.20s/stat", task->d_name);
+        std::FILE* file = std::fopen(path, "r");
+        if (!file) continue;  // a thread that ended meanwhile
+        char text[512];
+        const std::size_t length = std::fread(text, 1, sizeof text - 1, file);
+        std::fclose(file);
+        text[length] = '\0';
+        // "tid (name) S ...": the name may hold spaces and parentheses, so the state follows the last ')'.
+        const char* close = std::strrchr(text, ')');
+        if (close && close[1] == ' ' && close[2] == 'R') ++running;
+    }
+    closedir(tasks);
+    return running;
+}
+#else
+int own_running_threads() { return 0; }
+#endif
+
 int free_cores(int most, int usable, int online, int busy_elsewhere) {
     most = std::max(1, most);
     if (usable <= 0 || online <= 0 || busy_elsewhere <= 0) return most;
@@ -70,9 +99,11 @@ int automatic_frame_threads() {
             }
         const int running = running_threads_now();
         if (running <= 1) return most;  // unreadable, or nothing else runs
-        fewest = std::min(fewest, running);
+        const int elsewhere = running - std::max(1, own_running_threads());
+        if (elsewhere <= 0) return most;  // only this process's threads run
+        fewest = std::min(fewest, elsewhere);
     }
-    return free_cores(most, usable, online > 0 && online < INT_MAX ? static_cast<int>(online) : usable, fewest - 1);
+    return free_cores(most, usable, online > 0 && online < INT_MAX ? static_cast<int>(online) : usable, fewest);
 #else
     return most;
 #endif

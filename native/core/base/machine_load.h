@@ -14,4 +14,9 @@ int automatic_frame_threads();
 // running for other programs spread evenly over them, the whole cores left, capped at `most` threads, at least 1.
 int free_cores(int most, int usable, int online, int busy_elsewhere);
 
+// This process's threads running or ready to run, the caller among them (Linux; 0 elsewhere or when unreadable): the
+// machine's count less these is what other programs hold, so the core's own OpenMP threads still spinning after a
+// parallel region, or the host's (Blender's) busy threads, never take a frame's cores away.
+int own_running_threads();
+
 }  // namespace meniscus

@@ -22,6 +22,11 @@ struct PipelineStats {
             if (entry.first == name) { entry.second = value; return; }
         counts.emplace_back(name, value);
     }
+    double count(const std::string& name, double missing = 0) const {
+        for (const auto& entry : counts)
+            if (entry.first == name) return entry.second;
+        return missing;
+    }
     double total_seconds() const {
         double total = 0;
         for (const auto& entry : stage_seconds) total += entry.second;

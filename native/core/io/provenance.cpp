@@ -202,7 +202,7 @@ std::string provenance_mismatch(const std::string& mesh_path, const std::string&
             const std::string name = parameter ? key.substr(10) : "interpolated attributes";
             return "made with " + name + " " + (had ? readable(*had) : "unknown") + ", now " + readable(value);
         }
-        if (find(found, "fluid_domain"))  // a fluid domain then, none now
+        if (find(found, "fluid_domain") && !find(wanted, "fluid_domain"))  // a fluid domain then, none now
             return "made with a fluid domain, now without";
         return "made with other parameters";
     }
