@@ -259,6 +259,37 @@ TEST_CASE("water in an open box obstacle is held by its walls and filled, the dr
     CHECK(c.count(CellClass::liquid) >= std::size_t(10 * 10 * 6));
 }
 
+TEST_CASE("a pool whose band holds no particles in some of its cells is still filled", "[interior_fill]") {
+    // A sparse Particle Sampling leaves cells of the band empty: here the band's middle layer in two columns of three.
+    // The band still spans its 3 cells over the water, so the water under it is no sheet over air.
+    const FluidDomain domain = closed_domain(24);
+    const std::vector<float> particles = particles_where(24, [](double x, double y, double z) {
+        const bool sparse_column = (int(x) + int(y)) % 3 != 0;
+        return pool_band(x, y, z) && !(sparse_column && z > 10 && z < 11);
+    });
+    const InteriorClassification c = classify_interior(view(particles), domain, 2);
+    for (int k = 1; k <= 7; ++k) CHECK(at(c, 12, 12, k) == CellClass::liquid);
+    CHECK(c.count(CellClass::liquid) >= std::size_t(22 * 22 * 7));
+}
+
+TEST_CASE("a pool under a wide floating obstacle is filled under it and around it", "[interior_fill]") {
+    // A raft (a closed slab from cell 3 to 21 in x and y, 8 to 14 in z) floating in the pool: the band's particles
+    // lie around it, none in it or under it. The column votes under the raft see through it to the air above; the
+    // water there must still count as held (by the raft above), not as water open to air on its sides.
+    FluidDomain domain = closed_domain(24);
+    domain.obstacles.push_back(box_faces({3, 3, 8}, {21, 21, 14}, {0, 1, 2, 3, 4, 5}));
+    const auto in_raft = [](double x, double y, double z) { return x > 3 && x < 21 && y > 3 && y < 21 && z > 8 && z < 14; };
+    const std::vector<float> particles = particles_where(24, [&](double x, double y, double z) {
+        return pool_band(x, y, z) && !in_raft(x, y, z);
+    });
+    const InteriorClassification c = classify_interior(view(particles), domain, 2);
+    CHECK(at(c, 12, 12, 10) == CellClass::solid);
+    for (int k = 1; k <= 6; ++k) CHECK(at(c, 12, 12, k) == CellClass::liquid);  // under the raft
+    for (int k = 1; k <= 7; ++k) CHECK(at(c, 1, 12, k) == CellClass::liquid);   // beside it
+    CHECK(at(c, 12, 12, 16) == CellClass::air);
+    CHECK(c.count(CellClass::liquid) >= std::size_t(22 * 22 * 6));
+}
+
 TEST_CASE("the fill is the same for every thread count", "[interior_fill][threads]") {
     const FluidDomain domain = closed_domain(24);
     const std::vector<float> particles = particles_where(24, [](double x, double y, double z) {

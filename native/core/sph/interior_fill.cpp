@@ -262,6 +262,10 @@ std::vector<int8_t> column_votes(const Grid& grid, const std::vector<CellClass>&
             shell_below[h] = below;
         }
         bool above = false;  // shell met going down from the top; solid cells let the view through
+        // Under an obstacle with no shell over it, a column alone cannot tell air under a table from water under a
+        // floating raft: those cells abstain, and their region's other votes decide (the pool around the raft). The
+        // closed top border's layer is no obstacle.
+        bool shadowed = false;
         for (int h = height - 1; h >= 0; --h) {
             const int64_t cell = bottom + step * h;
             const CellClass cls = cells[cell];
@@ -269,8 +273,11 @@ std::vector<int8_t> column_votes(const Grid& grid, const std::vector<CellClass>&
                 above = true;
                 continue;
             }
-            if (cls == CellClass::solid) continue;
-            if (!above) votes[cell] = kAir;
+            if (cls == CellClass::solid) {
+                shadowed = shadowed || (!above && h < height - 1);
+                continue;
+            }
+            if (!above) votes[cell] = shadowed ? kAbstain : kAir;
             else if (!shell_below[h]) votes[cell] = kLiquid;
         }
     }, 16);
@@ -391,7 +398,7 @@ InteriorClassification classify_interior(const PositionsView& positions, const F
     // by an obstacle nobody described borders that obstacle's cells (which look like air) only along the
     // obstacle's sides, and the domain's walls elsewhere. And so is a group under a sheet thinner than the band: the
     // solver keeps particles band_width_cells deep under every free surface, so over water the cells holding
-    // particles run that deep above it (deeper where the surface slopes); in most of the group's columns fewer
+    // particles span that deep above it (deeper where the surface slopes); in most of the group's columns less
     // (the median, half a cell of slack) is a sheet with air under it, whatever walls stand around it. Not judged
     // under fewer columns than kMinThinCoverColumns: one or two columns of a jittered band say too little, and the
     // region around them takes its class from their vote.
@@ -416,13 +423,19 @@ InteriorClassification classify_interior(const PositionsView& positions, const F
                 const int up = c[up_axis] + (up_positive ? 1 : -1);
                 if (up >= 0 && up < grid.n[up_axis] && cells[cell + up_step] == CellClass::shell) {
                     ++covered_faces;
-                    int run = 0;
+                    // The span from the lowest to the highest cell holding particles in the shell above: a cell of
+                    // the band that happens to hold none (a sparse Particle Sampling) does not thin the cover.
+                    int lowest_held = -1, highest_held = -1, step_up = 0;
                     int64_t above = cell + up_step;
                     for (int h = up; h >= 0 && h < grid.n[up_axis] && cells[above] == CellClass::shell; h += up_positive ? 1 : -1) {
-                        run += held[above];
+                        if (held[above]) {
+                            if (lowest_held < 0) lowest_held = step_up;
+                            highest_held = step_up;
+                        }
+                        ++step_up;
                         above += up_step;
                     }
-                    held_above.push_back(run);
+                    held_above.push_back(lowest_held < 0 ? 0 : highest_held - lowest_held + 1);
                 }
                 for (int a = 0; a < 3; ++a) {
                     if (a == up_axis) continue;
