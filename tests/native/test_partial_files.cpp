@@ -5,6 +5,7 @@
 #include <chrono>
 #include <filesystem>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "base/platform.h"
@@ -56,7 +57,8 @@ TEST_CASE("only abandoned temporary files of gone writers are removed", "[partia
         }
     test::write_text(folder.file(recent), "x");
     fs::create_directories(folder.path / ("sub.partial" + dead + ".d"));  // a folder is never removed
-    fs::last_write_time(folder.path / ("sub.partial" + dead + ".d"), old);
+    std::error_code unsupported;  // Wine refuses to set a folder's time: the folder is then merely recent
+    fs::last_write_time(folder.path / ("sub.partial" + dead + ".d"), old, unsupported);
 
     std::vector<std::string> removed = remove_abandoned_partials(path_to_utf8(folder.path));
     std::sort(removed.begin(), removed.end());
