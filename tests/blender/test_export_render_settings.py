@@ -146,24 +146,36 @@ def test_empty_exports_empty_frames_and_lists_them():
 def test_reexport_over_the_played_file():
     """Exporting again over the file the surface plays: the cache file data-block left reading it is released first;
     where the file cannot be renamed over (Windows, while Blender still holds it open) the finished export is written
-    over it in place; where it cannot be written either, the export fails saying so, removes its partial file and plays
-    the earlier one again."""
+    over it in place; where it cannot be written either (another program reading it), the export waits for it a
+    while, then fails saying so, removes its partial file and plays the earlier one again."""
     if refuses_without_alembic():
         return
     export_with("EMPTY", 28, 29)
     earlier = os.path.getsize(ABC), evaluated_counts(28)
     settings.render_failure = "EMPTY"
-    replace, copyfile = native_cache.os.replace, native_cache.shutil.copyfile
+    replace, copyfile, wait = native_cache.os.replace, native_cache.shutil.copyfile, native_cache.REPLACE_WAIT_SECONDS
 
     def refused(*_args):  # what Windows says while another process holds the file open
         raise PermissionError(13, "Permission denied")
+
+    refusals = []
+
+    def refused_twice(*args):  # a reader that lets go after a moment
+        if len(refusals) < 2:
+            refusals.append(args)
+            refused()
+        return copyfile(*args)
 
     native_cache.os.replace = refused
     try:
         result = native_cache.export_alembic(surface, scene, 28, 29, ABC)  # written over in place
         check(result.path == ABC and native_cache.playing_file(surface) == ABC, result)
         check(sorted(os.listdir(os.path.dirname(ABC))) == [os.path.basename(ABC)], os.listdir(os.path.dirname(ABC)))
+        native_cache.shutil.copyfile = refused_twice
+        result = native_cache.export_alembic(surface, scene, 28, 29, ABC)  # waited for the reader
+        check(len(refusals) == 2 and result.path == ABC and native_cache.playing_file(surface) == ABC, result)
         native_cache.shutil.copyfile = refused
+        native_cache.REPLACE_WAIT_SECONDS = 0.3
         native_cache.export_alembic(surface, scene, 28, 29, ABC)
     except native_cache.NativeCacheError as error:
         message = str(error)
@@ -171,7 +183,8 @@ def test_reexport_over_the_played_file():
         raise AssertionError("the export did not fail")
     finally:
         native_cache.os.replace, native_cache.shutil.copyfile = replace, copyfile
-    check(f"{ABC} cannot be replaced (Permission denied)" in message, message)
+        native_cache.REPLACE_WAIT_SECONDS = wait
+    check(f"{ABC} cannot be replaced (Permission denied; waited 0.3 s)" in message, message)
     check(sorted(os.listdir(os.path.dirname(ABC))) == [os.path.basename(ABC)], os.listdir(os.path.dirname(ABC)))
     check(native_cache.playing_file(surface) == ABC and (os.path.getsize(ABC), evaluated_counts(28)) == earlier,
           native_cache.playing_file(surface))
