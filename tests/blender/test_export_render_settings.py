@@ -192,6 +192,26 @@ def test_reexport_over_the_played_file():
     check(result.path == ABC and native_cache.playing_file(surface) == ABC, result)
     unused = [cache_file.filepath for cache_file in bpy.data.cache_files if cache_file.users == 0]
     check(not unused, f"cache files left reading nothing: {unused}")
+    if os.name == "nt":  # the same with a real Windows reader, which lets go after a second
+        hold_without_sharing(ABC, seconds=1.0)
+        result = native_cache.export_alembic(surface, scene, 28, 29, ABC)
+        check(result.path == ABC and native_cache.playing_file(surface) == ABC, result)
+
+
+def hold_without_sharing(path, seconds):
+    """Opens path as many Windows programs read a file, sharing neither delete nor write access (so that it can be
+    neither renamed over nor written), and closes it after seconds."""
+    import ctypes
+    import threading
+    kernel32 = ctypes.WinDLL("kernel32", use_last_error=True)
+    kernel32.CreateFileW.restype = ctypes.c_void_p
+    kernel32.CreateFileW.argtypes = [ctypes.c_wchar_p, ctypes.c_uint32, ctypes.c_uint32, ctypes.c_void_p,
+                                     ctypes.c_uint32, ctypes.c_uint32, ctypes.c_void_p]
+    kernel32.CloseHandle.argtypes = [ctypes.c_void_p]
+    generic_read, file_share_read, open_existing = 0x80000000, 1, 3
+    handle = kernel32.CreateFileW(path, generic_read, file_share_read, None, open_existing, 0, None)
+    check(handle not in (None, ctypes.c_void_p(-1).value), f"cannot open {path}: {ctypes.get_last_error()}")
+    threading.Timer(seconds, kernel32.CloseHandle, (handle,)).start()
 
 
 def render_still(frame):
