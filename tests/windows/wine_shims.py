@@ -1,14 +1,18 @@
-"""Test harness only: what a Windows CPython 3.12+ needs to run numpy 2.x and `bpy` 5.2 under Debian 12's Wine 8.0
-(the Windows Python 3.13 tests, Windows `bpy` 5.2), put into that Python's folder, never into a package:
+"""Test harness only: what a Windows CPython needs to run numpy and `bpy` under Debian 12's Wine 8.0 (the tests of
+tests/windows/run.sh), put into that Python's folder, never into a package:
 
     python3 tests/windows/wine_shims.py build/windows/python-3.13
     WINEDLLOVERRIDES=ucrtbase=n,b wine64 build/windows/python-3.13/python.exe ...
 
-- Wine 8.0's ucrtbase.dll leaves the C99 complex functions unimplemented, which numpy 2.x imports; the shim
-  (tests/windows/ucrtbase_shim.c) implements them.
+- Wine 8.0's ucrtbase.dll leaves the C99 complex functions unimplemented, which numpy imports: 2.x calls them at
+  import, 1.26 in its complex maths (np.exp of a complex array); the shim (tests/windows/ucrtbase_shim.c) implements
+  them.
 - Python 3.12+'s `platform` asks WMI for the Windows version through its _wmi module, which stops the process at
   Wine's unimplemented propsys.dll.VariantToString (bpy 5.2 calls `platform` at import); a sitecustomize.py in the
   Python's site-packages hides _wmi, and `platform` takes its fallback (the version from the system, as without WMI).
+- Python 3.12+'s shutil.copy2 (so copytree, as the add-on's core copy uses it) calls KERNEL32's CopyFile2, which
+  Wine 8.0 leaves unimplemented; the same sitecustomize.py hides _winapi.CopyFile2, and shutil copies as Python 3.11
+  does (copyfile, then copystat).
 
 The shim, a native ucrtbase.dll beside python.exe (which Wine loads first with the override above), exports the same
 names as Wine's: the complex functions from the shim, every other name forwarded to ucrtwine.dll, a copy of Wine's own
@@ -34,9 +38,13 @@ def exported_names(dll):
 
 
 SITECUSTOMIZE = """\
-# Written by tests/windows/wine_shims.py (test harness, Wine only): Wine 8.0 cannot answer Python's WMI queries.
+# Written by tests/windows/wine_shims.py (test harness, Wine only): Wine 8.0 cannot answer Python's WMI queries and
+# has no CopyFile2.
 import sys
+import _winapi
 sys.modules["_wmi"] = None
+if hasattr(_winapi, "CopyFile2"):
+    del _winapi.CopyFile2
 """
 
 
@@ -49,7 +57,7 @@ def main():
         return
     # Compiled first: the names it implements are its shim_* symbols (most come from macros).
     # Linked to msvcrt.dll (mingw-w64's default C runtime), never to ucrtbase: the shim must not import itself.
-    compiler = "x86_64-w64-mingw32-gcc"
+    compiler = "x86_64-w64-mingw32-gcc-posix"  # what MENISCUS_WINDOWS_PACKAGES (scripts/lib.sh) installs
     objects = folder / "ucrtbase_shim.o"
     subprocess.run([compiler, "-O2", "-c", "-o", str(objects), str(SOURCE)], check=True)
     symbols = subprocess.run(["x86_64-w64-mingw32-nm", "-g", "--defined-only", str(objects)], check=True,
