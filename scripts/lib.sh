@@ -76,15 +76,27 @@ PYTHON
   echo "$dir"
 }
 
-# windows_bpy VERSION: prints the folder where the Windows `bpy` VERSION from PyPI (win_amd64 wheel, about 330 MB) is
-# unpacked with the numpy it needs, for a Windows CPython 3.11 under Wine (PYTHONPATH); made once under build/windows/.
+# windows_bpy VERSION: prints the folder where the Windows `bpy` VERSION from PyPI (win_amd64 wheel, 330-340 MB) is
+# unpacked with the packages it needs, for the Windows CPython of that Blender (3.11 for 4.x, 3.13 for 5.2) under
+# Wine (PYTHONPATH); made once under build/windows/, the wheels kept in build/windows/downloads. Pinned: 4.5 with
+# numpy 1.26.4; 5.2 with numpy 2.x (which needs tests/windows/wine_shims.py under Wine) and the modules 5.2 imports
+# at start-up (cattrs, requests, zstandard), at the versions PyPI's Linux bpy 5.2.3 resolved to.
 windows_bpy() {
-  local version="$1" dir="build/windows/bpy-$1"
+  local version="$1" dir="build/windows/bpy-$1" downloads=build/windows/downloads python_version packages
+  case "$version" in
+    4.5) python_version=3.11 packages=(bpy==4.5.15 numpy==1.26.4) ;;
+    5.2) python_version=3.13 packages=(bpy==5.2.3 numpy==2.5.5 attrs==26.1.0 cattrs==26.2.1 certifi==2026.10.19.post1
+         charset-normalizer==3.5.3 idna==3.20 requests==2.34.2 typing_extensions==4.16.0 urllib3==2.8.0
+         zstandard==0.25.0) ;;
+    *) echo "windows_bpy: no pinned Windows bpy $version" >&2; return 1 ;;
+  esac
   if [ ! -f "$dir/.meniscus-complete" ]; then
     rm -rf "$dir"
-    python3 -m pip install -q --no-deps --only-binary=:all: --platform win_amd64 --python-version 3.11 \
-      --disable-pip-version-check --root-user-action=ignore --target "$dir" "bpy==$version.*" numpy==1.26.4 \
-      2>&1 | { grep -v "^WARNING: Location" >&2 || true; }
+    local options=(--no-deps --only-binary=:all: --platform win_amd64 --python-version "$python_version"
+                   --disable-pip-version-check)
+    { python3 -m pip download -q "${options[@]}" -d "$downloads" "${packages[@]}" &&
+      python3 -m pip install -q "${options[@]}" --no-index --find-links "$downloads" --root-user-action=ignore \
+        --ignore-requires-python --target "$dir" "${packages[@]}"; } 2>&1 | { grep -v "^WARNING: Location" >&2 || true; }
     [ "${PIPESTATUS[0]}" -eq 0 ] || return 1
     touch "$dir/.meniscus-complete"
   fi

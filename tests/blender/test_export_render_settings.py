@@ -36,11 +36,6 @@ settings.is_surface = True
 ABC = os.path.join(_temporary.name, "cache", f"{bpy.path.clean_name(surface.name)}.abc")
 
 
-def file_bytes(path):
-    with open(path, "rb") as file:
-        return file.read()
-
-
 def evaluated_counts(frame):
     scene.frame_set(frame)
     mesh = surface.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
@@ -151,26 +146,39 @@ def test_empty_exports_empty_frames_and_lists_them():
 def test_reexport_over_the_played_file():
     """Exporting again over the file the surface plays: the cache file data-block left reading it is released first;
     where the file cannot be renamed over (Windows, while Blender still holds it open) the finished export is written
-    over it in place; where it cannot be written either, the export fails saying so, removes its partial file and plays
-    the earlier one again."""
+    over it in place; where it cannot be written either (another program reading it), the export waits for it a
+    while, then fails saying so, removes its partial file and plays the earlier one again."""
     if refuses_without_alembic():
         return
     export_with("EMPTY", 28, 29)
     settings.render_failure = "EMPTY"
-    replace, copyfile = native_cache.os.replace, native_cache.shutil.copyfile
+    replace, copyfile, wait = native_cache.os.replace, native_cache.shutil.copyfile, native_cache.REPLACE_WAIT_SECONDS
 
     def refused(*_args):  # what Windows says while another process holds the file open
         raise PermissionError(13, "Permission denied")
+
+    refusals = []
+
+    def refused_twice(*args):  # a reader that lets go after a moment
+        if len(refusals) < 2:
+            refusals.append(args)
+            refused()
+        return copyfile(*args)
 
     native_cache.os.replace = refused
     try:
         result = native_cache.export_alembic(surface, scene, 28, 29, ABC)  # written over in place
         check(result.path == ABC and native_cache.playing_file(surface) == ABC, result)
         check(sorted(os.listdir(os.path.dirname(ABC))) == [os.path.basename(ABC)], os.listdir(os.path.dirname(ABC)))
-        # What the failed export below must leave playing: this file, byte for byte (two exports of the same frames
-        # may differ in a few bytes of the exporter's metadata, so the earlier export is no reference).
-        earlier = file_bytes(ABC), evaluated_counts(28)
+        native_cache.shutil.copyfile = refused_twice
+        result = native_cache.export_alembic(surface, scene, 28, 29, ABC)  # waited for the reader
+        check(len(refusals) == 2 and result.path == ABC and native_cache.playing_file(surface) == ABC, result)
+        # What the refused export must leave as it is: measured here, as two exports of the same frames can differ
+        # in a few bytes (seen under Wine).
+        with open(ABC, "rb") as played:
+            earlier = played.read(), evaluated_counts(28)
         native_cache.shutil.copyfile = refused
+        native_cache.REPLACE_WAIT_SECONDS = 0.3
         native_cache.export_alembic(surface, scene, 28, 29, ABC)
     except native_cache.NativeCacheError as error:
         message = str(error)
@@ -178,16 +186,38 @@ def test_reexport_over_the_played_file():
         raise AssertionError("the export did not fail")
     finally:
         native_cache.os.replace, native_cache.shutil.copyfile = replace, copyfile
-    check(f"{ABC} cannot be replaced (Permission denied)" in message, message)
+        native_cache.REPLACE_WAIT_SECONDS = wait
+    check(f"{ABC} cannot be replaced (Permission denied; waited 0.3 s)" in message, message)
     check(sorted(os.listdir(os.path.dirname(ABC))) == [os.path.basename(ABC)], os.listdir(os.path.dirname(ABC)))
-    now = file_bytes(ABC), evaluated_counts(28)
+    with open(ABC, "rb") as played:
+        now = played.read(), evaluated_counts(28)
     check(native_cache.playing_file(surface) == ABC and now == earlier,
-          f"playing {native_cache.playing_file(surface)}; (size, counts at 28) {(len(now[0]), now[1])}, "
-          f"before {(len(earlier[0]), earlier[1])}, same bytes: {now[0] == earlier[0]}")
+          f"plays {native_cache.playing_file(surface)}; file size and frame 28's counts {len(now[0]), now[1]}, "
+          f"before {len(earlier[0]), earlier[1]}")
     result = native_cache.export_alembic(surface, scene, 28, 29, ABC)
     check(result.path == ABC and native_cache.playing_file(surface) == ABC, result)
     unused = [cache_file.filepath for cache_file in bpy.data.cache_files if cache_file.users == 0]
     check(not unused, f"cache files left reading nothing: {unused}")
+    if os.name == "nt":  # the same with a real Windows reader, which lets go after a second
+        hold_without_sharing(ABC, seconds=1.0)
+        result = native_cache.export_alembic(surface, scene, 28, 29, ABC)
+        check(result.path == ABC and native_cache.playing_file(surface) == ABC, result)
+
+
+def hold_without_sharing(path, seconds):
+    """Opens path as many Windows programs read a file, sharing neither delete nor write access (so that it can be
+    neither renamed over nor written), and closes it after seconds."""
+    import ctypes
+    import threading
+    kernel32 = ctypes.WinDLL("kernel32", use_last_error=True)
+    kernel32.CreateFileW.restype = ctypes.c_void_p
+    kernel32.CreateFileW.argtypes = [ctypes.c_wchar_p, ctypes.c_uint32, ctypes.c_uint32, ctypes.c_void_p,
+                                     ctypes.c_uint32, ctypes.c_uint32, ctypes.c_void_p]
+    kernel32.CloseHandle.argtypes = [ctypes.c_void_p]
+    generic_read, file_share_read, open_existing = 0x80000000, 1, 3
+    handle = kernel32.CreateFileW(path, generic_read, file_share_read, None, open_existing, 0, None)
+    check(handle not in (None, ctypes.c_void_p(-1).value), f"cannot open {path}: {ctypes.get_last_error()}")
+    threading.Timer(seconds, kernel32.CloseHandle, (handle,)).start()
 
 
 def render_still(frame):

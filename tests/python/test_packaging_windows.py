@@ -67,3 +67,23 @@ def test_windows_legacy_zip_carries_the_cores_for_310_and_311():
     assert {f"meniscus/_core.{tag}-win_amd64.pyd" for tag in ("cp310", "cp311")} <= names
     assert "meniscus/__init__.py" in names and "meniscus/api.py" in names
     assert not any(name.endswith((".so", ".dll")) for name in names)
+
+
+def test_no_wine_shim_in_the_windows_packages():
+    """The harness's Wine shims (tests/windows/wine_shims.py: a ucrtbase.dll, Wine's own renamed, a sitecustomize.py)
+    live in the test's Windows Pythons only, never in a package (nested wheels included)."""
+    def names(archive):
+        for name in archive.namelist():
+            yield name
+            if name.endswith(".whl"):
+                with zipfile.ZipFile(archive.open(name)) as nested:
+                    yield from names(nested)
+
+    packages = sorted(DIST.glob(f"meniscus-{VERSION}-*win_amd64.whl")) + sorted(
+        DIST.glob(f"meniscus-{VERSION}-*windows_x64.zip"))
+    assert len(packages) == 5, [path.name for path in packages]
+    for path in packages:
+        with zipfile.ZipFile(path) as archive:
+            shims = [name for name in names(archive)
+                     if re.search(r"(^|/)(ucrtbase|ucrtwine)\.dll$|(^|/)sitecustomize\.py$", name, re.I)]
+        assert not shims, f"{path.name} carries the test harness's Wine shims: {shims}"
