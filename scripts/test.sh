@@ -4,7 +4,7 @@
 #   Blender zips, built by scripts/package.sh) installed into clean environments; the headless Blender suite against
 #   the installed add-on on Debian's Blender 3.4 (legacy zip) and on bpy 4.2, 4.5, 5.0 and 5.2 (extension zip); the
 #   Windows cross-build under Wine, the Windows wheels in Windows CPython and the Windows extension zip in Windows
-#   bpy 4.5 under Wine; the clang/libc++/libomp build; the C++ suite under ASan/UBSan; a small run of
+#   bpy 4.5 and 5.2 under Wine; the clang/libc++/libomp build; the C++ suite under ASan/UBSan; a small run of
 #   the speed benchmark against pysplashsurf.
 set -euo pipefail
 cd "$(dirname "$0")/.."
