@@ -279,8 +279,7 @@ void add_parameter_flags(CLI::App& command, Parameters& parameters) {
 // is removed before the mesh is replaced and written after it: an output never sits beside another run's record.
 void write_mesh_completely(const TriMesh& mesh, const std::string& output, int threads, const std::string& provenance = "") {
     const fs::path target = path_from_utf8(output);
-    const fs::path partial = target.parent_path() / path_from_utf8(".partial-" + std::to_string(current_process_id()) + "-" +
-                                                                    path_to_utf8(target.filename()));
+    const fs::path partial = path_from_utf8(hidden_partial_path(output, current_process_id()));
     std::error_code error;
     if (!target.parent_path().empty()) fs::create_directories(target.parent_path(), error);  // a farm's fresh output folder
     try {

@@ -307,11 +307,7 @@ TEST_CASE("particle box: particles outside are dropped and counted", "[container
     std::size_t expected_outside = 0;
     for (std::size_t i = 0; i < particles.size() / 3; ++i) expected_outside += particles[3 * i] > 0.3f;
     const PipelineResult result = run(particles, options);
-    double outside = -1.0, counted = -1.0;
-    for (const auto& entry : result.stats.counts) {
-        if (entry.first == "particles_outside_box") outside = entry.second;
-        if (entry.first == "particles") counted = entry.second;
-    }
+    const double outside = result.stats.count("particles_outside_box", -1.0), counted = result.stats.count("particles", -1.0);
     CHECK(outside == double(expected_outside));
     CHECK(counted == double(particles.size() / 3 - expected_outside));
     // The surface ends a kernel support beyond the last particle kept (x = 0.275).

@@ -115,12 +115,6 @@ double tube_section_volume(const TriMesh& m) {
     return volume;
 }
 
-double count_of(const PipelineStats& stats, const std::string& name) {
-    for (const auto& entry : stats.counts)
-        if (entry.first == name) return entry.second;
-    return -1.0;
-}
-
 }  // namespace
 
 TEST_CASE("heat coefficients keep constants, match the heat kernel, and need ~sqrt(N) terms", "[heat]") {
@@ -279,7 +273,7 @@ TEST_CASE("heat smoothing: the same physical surface at c = 0.25 and c = 0.5 (pa
         const MeshQuality raw = assess_quality(r.raw_mesh, 2, 2 * kRadius);
         hfl_abs[k] = assess_quality(r.mesh, 2, 2 * kRadius, raw.mean_edge_length).hfl / kRadius;
         hfl_ratio[k] = hfl_abs[k] * kRadius / raw.hfl;
-        CHECK(count_of(r.stats, "smoothing_reach") == Approx(kMeasuredReach));  // the same at both cube sizes
+        CHECK(r.stats.count("smoothing_reach", -1.0) == Approx(kMeasuredReach));  // the same at both cube sizes
         ++k;
     }
     INFO("smoothed " << heat_abs[0] << " / " << heat_abs[1] << " r, raw " << raw_abs[0] << " / " << raw_abs[1] << " r; hfL ratio "

@@ -49,12 +49,6 @@ std::vector<float> particles_where(int n, const std::function<bool(double, doubl
     return out;
 }
 
-double count_of(const PipelineStats& stats, const char* name) {
-    for (const auto& entry : stats.counts)
-        if (entry.first == name) return entry.second;
-    return -1.0;
-}
-
 PositionsView view(const std::vector<float>& p) { return PositionsView(p.data(), p.size() / 3); }
 
 CellClass at(const InteriorClassification& c, int i, int j, int k) {
@@ -320,14 +314,14 @@ TEST_CASE("the pipeline fills a narrow band into solid water, on request or by i
     const double pool = 22 * 22 * 11 * kCell * kCell * kCell;
     CHECK(mesh_volume(solid.mesh) == Approx(pool).epsilon(0.05));
     CHECK(mesh_volume(hollow.mesh) < 0.5 * pool);
-    CHECK(count_of(solid.stats, "interior_fill_particles") > 0);
+    CHECK(solid.stats.count("interior_fill_particles", -1.0) > 0);
 
     options.reconstruction.fill_interior = 0;
     CHECK(mesh_volume(run_pipeline(view(particles), {}, options).mesh) == Approx(mesh_volume(hollow.mesh)));
 
     domain.band_width_cells = 0.0;  // the whole liquid has particles: automatic does not fill
     options.reconstruction.fill_interior = -1;
-    CHECK(count_of(run_pipeline(view(particles), {}, options).stats, "interior_fill_particles") == -1.0);
+    CHECK(run_pipeline(view(particles), {}, options).stats.count("interior_fill_particles", -1.0) == -1.0);
 }
 
 TEST_CASE("particles and obstacles far outside the grid, or not finite, are left out", "[interior_fill][bad-input]") {

@@ -32,6 +32,9 @@ TEST_CASE("a temporary file's name gives its writer's process id", "[partial]") 
     CHECK(path == path_to_utf8(fs::path("cache") / "fluid_0023.partial42.npz"));
     CHECK(partial_writer(path_to_utf8(path_from_utf8(path).filename())) == 42);
     CHECK(partial_writer(path_to_utf8(path_from_utf8(partial_path("fluid_0023.npz.meniscus", 42)).filename())) == 42);
+    const std::string hidden = hidden_partial_path(path_to_utf8(fs::path("out") / "surface_0023.ply"), 42);
+    CHECK(hidden == path_to_utf8(fs::path("out") / ".partial-42-surface_0023.ply"));
+    CHECK(partial_writer(path_to_utf8(path_from_utf8(hidden).filename())) == 42);
 }
 
 TEST_CASE("this process exists and an impossible process id does not", "[partial][platform]") {

@@ -35,6 +35,12 @@ std::string partial_path(const std::string& target, long process_id) {
     return path_to_utf8(path.parent_path() / path_from_utf8(stem + ".partial" + std::to_string(process_id) + extension));
 }
 
+std::string hidden_partial_path(const std::string& target, long process_id) {
+    const fs::path path = path_from_utf8(target);
+    return path_to_utf8(path.parent_path() /
+                        path_from_utf8(".partial-" + std::to_string(process_id) + "-" + path_to_utf8(path.filename())));
+}
+
 long partial_writer(const std::string& name) {
     static const std::string marker = ".partial";
     if (name.rfind(marker + "-", 0) == 0) {  // the command line's ".partial-<id>-<name>"

@@ -18,6 +18,9 @@ constexpr double kAbandonedPartialSeconds = 600;
 // The temporary name for writing `target` (a path) in process process_id: "<stem>.partial<id><extension>" where the
 // extension is the last one of target's name, so that the format stays recognisable and frame patterns skip it.
 std::string partial_path(const std::string& target, long process_id);
+// The command line's temporary name for writing `target`: ".partial-<id>-<name>" in target's folder (hidden on Unix;
+// the extension, which chooses the format, stays last).
+std::string hidden_partial_path(const std::string& target, long process_id);
 // The process id in a temporary file's name (either form above); -1 for any other name.
 long partial_writer(const std::string& file_name);
 // Removes the temporary files in folder whose writer is gone (no such process here) and that were untouched for
