@@ -36,6 +36,7 @@ def main():
     linux = [str(ROOT / "build" / "bin" / "meniscus")]
     windows = ["/usr/lib/wine/wine64", str(ROOT / "build-windows" / "bin" / "meniscus.exe")]
     rows = []
+    loads = [os.getloadavg()[0]]  # a shared machine: the figures mean little without it
     with tempfile.TemporaryDirectory() as folder:
         folder = pathlib.Path(folder)
         for threads in (1, 2):
@@ -43,12 +44,15 @@ def main():
             for _ in range(args.repetitions):
                 for name, command in (("linux", linux), ("windows", windows)):
                     times[name].append(compute_seconds(command, folder, environment, threads))
+                loads.append(os.getloadavg()[0])
             linux_median, windows_median = statistics.median(times["linux"]), statistics.median(times["windows"])
             rows.append(f"| {threads} | {linux_median:.3f} s | {windows_median:.3f} s | {windows_median / linux_median:.2f}x |")
     table = "\n".join([
         f"Windows build (mingw-w64, under Wine 8.0) against the Linux build (GCC 12), {FRAME.name}, "
         f"{' '.join(ARGUMENTS[:-1])}; compute seconds (total - read - write from --stats), medians of "
-        f"{args.repetitions}, runs alternating. `python3 bench/windows_wine.py`",
+        f"{args.repetitions}, runs alternating; OMP_WAIT_POLICY={os.environ.get('OMP_WAIT_POLICY', '(unset)')}, "
+        f"1-minute load average {min(loads):.1f}-{max(loads):.1f} on {os.cpu_count()} cores. "
+        "`python3 bench/windows_wine.py`",
         "",
         "| threads | Linux | Windows under Wine | Windows / Linux |",
         "|---:|---:|---:|---:|",

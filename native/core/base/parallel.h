@@ -48,11 +48,33 @@ private:
     std::exception_ptr error_;
 };
 
-// Calls body(i) for i in [0, n) on `threads` threads with dynamic scheduling.
+// Runs body() once per thread of one OpenMP parallel region of `threads` threads (the worksharing loops in it split
+// among them), or once on the calling thread, with no region, when that is one thread: GNU libgomp builds and frees
+// a team for every region even of one thread, with three semaphores, which on Windows are kernel objects (under
+// Wine, six round trips to its server: 0.15-0.2 ms a region, against 0.5 us on Linux; docs/performance.md).
+// Worksharing loops outside a region run on the one thread, in order.
+template <class F>
+void parallel_region(int threads, F&& body) {
+    threads = resolve_threads(threads);
+    if (threads <= 1) {
+        body();
+        return;
+    }
+#pragma omp parallel num_threads(threads)
+    body();
+}
+
+// Calls body(i) for i in [0, n) on `threads` threads with dynamic scheduling; in order on the calling thread when
+// that is one thread or there is at most one i (no region to start: parallel_region).
 template <class F>
 void parallel_for(int64_t n, int threads, F&& body, int64_t chunk = 1) {
+    threads = resolve_threads(threads);
+    if (threads <= 1 || n <= 1) {
+        for (int64_t i = 0; i < n; ++i) body(i);
+        return;
+    }
     ParallelErrors errors;
-#pragma omp parallel for schedule(dynamic, chunk) num_threads(resolve_threads(threads))
+#pragma omp parallel for schedule(dynamic, chunk) num_threads(threads)
     for (int64_t i = 0; i < n; ++i) errors.run([&] { body(i); });
     errors.rethrow();
 }
@@ -96,9 +118,14 @@ double ordered_block_sum(int64_t n, int threads, int64_t block, F&& term) {
 // so no fixed blocks are needed.
 template <class F>
 std::size_t parallel_count(int64_t n, int threads, F&& count) {
-    ParallelErrors errors;
+    threads = resolve_threads(threads);
     std::size_t total = 0;
-#pragma omp parallel for reduction(+ : total) schedule(static) num_threads(resolve_threads(threads))
+    if (threads <= 1 || n <= 1) {  // no region to start (parallel_region)
+        for (int64_t i = 0; i < n; ++i) total += static_cast<std::size_t>(count(i));
+        return total;
+    }
+    ParallelErrors errors;
+#pragma omp parallel for reduction(+ : total) schedule(static) num_threads(threads)
     for (int64_t i = 0; i < n; ++i) errors.run([&] { total += static_cast<std::size_t>(count(i)); });
     errors.rethrow();
     return total;

@@ -292,8 +292,7 @@ int apply_heat_polynomial(std::vector<float>& x, const UmbrellaRows& rows, const
     // the serial loop, so the bits do not depend on the threads. Nothing in here throws.
     const int64_t blocks = (nv + kBlock - 1) / kBlock;
     const float* const centre_of = centre;
-#pragma omp parallel num_threads(resolve_threads(threads))
-    {
+    parallel_region(threads, [&] {
         // Each thread swaps its own copies of the two term pointers after every term, so all agree.
         float* t_older = older;
         float* t_current = current;
@@ -346,7 +345,7 @@ int apply_heat_polynomial(std::vector<float>& x, const UmbrellaRows& rows, const
                 std::swap(t_older, t_current);
             }
         }
-    }
+    });
     return polynomial.applications();
 }
 
@@ -407,8 +406,7 @@ void vertex_normals(const TriMesh& mesh, const MeshAdjacency& adjacency, std::ve
     // One parallel region for both loops (nothing in them throws): the returns run once per part, and at coarse cube
     // sizes (15 parts on small meshes) each region's start counts where other programs hold cores.
     const int64_t face_blocks = (nt + kBlock - 1) / kBlock, vertex_blocks = (nv + kBlock - 1) / kBlock;
-#pragma omp parallel num_threads(resolve_threads(threads))
-    {
+    parallel_region(threads, [&] {
 #pragma omp for schedule(dynamic, 1)
         for (int64_t block = 0; block < face_blocks; ++block)
             for (int64_t f = block * kBlock, end = std::min(nt, (block + 1) * kBlock); f < end; ++f) {
@@ -448,7 +446,7 @@ void vertex_normals(const TriMesh& mesh, const MeshAdjacency& adjacency, std::ve
                     (*offset)[v] = d;
                 }
             }
-    }
+    });
 }
 
 // The surface's aggregates (post/surface_aggregates.h) with what the return's low-pass needs of them, built once per

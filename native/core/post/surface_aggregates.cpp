@@ -211,8 +211,7 @@ int aggregate_chebyshev(std::vector<double>& x, int dims, const SurfaceAggregate
     // cores. A few thousand aggregates (coarse meshes, small frames) take less than a barrier: one thread.
     constexpr int64_t kTermBlock = 1024;
     const int64_t blocks = (count + kTermBlock - 1) / kTermBlock;
-#pragma omp parallel num_threads(count > 4096 ? resolve_threads(threads) : 1)
-    {
+    parallel_region(count > 4096 ? threads : 1, [&] {
         double* t_older = older.data();
         double* t_current = current.data();
 #pragma omp for schedule(dynamic, 1)
@@ -225,7 +224,7 @@ int aggregate_chebyshev(std::vector<double>& x, int dims, const SurfaceAggregate
                            std::min(count, (b + 1) * kTermBlock));
             std::swap(t_older, t_current);
         }
-    }
+    });
     x.swap(acc);
     return degree;
 }

@@ -261,14 +261,13 @@ TriMesh mesh_bricks(const std::vector<LatticeCoords>& bricks, const BrickSampler
     {
         BrickMesher mesher(cube, threshold, box);
         ParallelErrors errors;
-#pragma omp parallel num_threads(threads)
-        {
+        parallel_region(threads, [&] {
             std::unique_ptr<BrickScratch> scratch;
             errors.run([&] { scratch = std::make_unique<BrickScratch>(); });
 #pragma omp for schedule(dynamic, 1)
             for (int64_t b = 0; b < static_cast<int64_t>(bricks.size()); ++b)
                 errors.run([&] { pieces[static_cast<std::size_t>(b)] = mesher.run(bricks[static_cast<std::size_t>(b)], *scratch, sample); });
-        }
+        });
         errors.rethrow();
     }
     TriMesh mesh;

@@ -223,8 +223,7 @@ std::vector<LatticeCoords> marked_bricks(const ParticleGrid& grid, double margin
 std::vector<LatticeCoords> listed_bricks(const ParticleGrid& grid, double margin, double cube_edge, int threads) {
     std::vector<std::vector<LatticeCoords>> per_thread(static_cast<std::size_t>(threads));
     ParallelErrors errors;
-#pragma omp parallel num_threads(threads)
-    {
+    parallel_region(threads, [&] {
         int thread = 0;
 #ifdef _OPENMP
         thread = omp_get_thread_num();
@@ -245,7 +244,7 @@ std::vector<LatticeCoords> listed_bricks(const ParticleGrid& grid, double margin
             std::sort(mine.begin(), mine.end(), coords_less);
             mine.erase(std::unique(mine.begin(), mine.end()), mine.end());
         });
-    }
+    });
     errors.rethrow();
     std::vector<LatticeCoords> bricks;
     for (auto& list : per_thread) bricks.insert(bricks.end(), list.begin(), list.end());
