@@ -50,7 +50,7 @@ for python_version in 3.10 3.11 3.13; do
   [ -f "$numpy" ] || python3 -m pip download -q --no-deps --only-binary=:all: --platform win_amd64 \
     --python-version "$python_version" --disable-pip-version-check -d build/windows/downloads \
     "numpy==$numpy_version" 2>&1 | { grep -v "^WARNING: Location" >&2 || true; }
-  echo "== Windows CPython $python_version under Wine${checks:+ (install, import, one frame)}"
+  echo "== Windows CPython $python_version under Wine${checks:+ (install, import, one frame; legacy zip core, held files)}"
   python3 tests/windows/test_wheels.py --python "$python" \
     --wheel "dist/meniscus-$version-$tag-$tag-win_amd64.whl" --numpy "$numpy" --linux-cli build/bin/meniscus \
     "${checks[@]}"
