@@ -17,6 +17,8 @@ import os
 import shutil
 import sys
 
+from . import busy_files
+
 # Libraries the wheel tools vendor beside the core: auditwheel in ../<package>.libs (reached through the core's run
 # path $ORIGIN/../<package>.libs), delocate in .dylibs; the legacy zip puts them beside the core ($ORIGIN).
 _LIBRARY_PREFIXES = ("lib",)
@@ -69,8 +71,15 @@ def load(module_name, package_dir, copies_root):
         shutil.rmtree(staging, ignore_errors=True)
         _copy_build(source, package_dir, staging)
         try:
-            os.replace(staging, target)  # whole or not at all: another Blender may be copying the same build
-        except OSError:
+            # Whole or not at all. Another Blender may have put the same build there first: the rename over its
+            # folder is refused, and its copy serves. On Windows a virus scanner may still be reading the new core,
+            # which refuses the rename for a moment.
+            busy_files.replace(staging, target, otherwise=lambda: os.path.isfile(copied))
+        except OSError as error:
+            if not os.path.isfile(copied):
+                raise OSError(f"the copy of the core could not be moved into place at {target} "
+                              f"({error.strerror or error})") from error
+        finally:
             shutil.rmtree(staging, ignore_errors=True)
     spec = importlib.util.spec_from_file_location(module_name, copied)
     module = importlib.util.module_from_spec(spec)

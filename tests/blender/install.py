@@ -9,6 +9,7 @@ Blender installed. Run by tests/blender/run.sh before the test scripts, in the s
 The preferences are saved with the add-on enabled, as Blender does on quit, so that a Blender started later
 without --factory-startup (a render farm node) has it.
 """
+import filecmp
 import glob
 import os
 import sys
@@ -23,6 +24,7 @@ from _support import check  # noqa: E402
 arguments = sys.argv[sys.argv.index("--") + 1:]
 ZIP, KIND = os.path.abspath(arguments[0]), arguments[1]
 python_tag = f"cp{sys.version_info.major}{sys.version_info.minor}"
+print("BLENDER_VERSION", bpy.app.version_string, flush=True)  # for run.sh's summary
 
 
 def test_install_from_zip():
@@ -48,6 +50,11 @@ def test_installed_where_a_user_install_goes():
     check(os.path.realpath(core.__file__).startswith(user_dir + os.sep), core.__file__)
     check(os.path.basename(core.__file__).startswith(f"_core.{sysconfig.get_config_var('SOABI')}") or
           python_tag in os.path.basename(core.__file__), f"{core.__file__} is not built for {python_tag}")
+    # It runs from its per-build copy (core_copy): a copy of the core the zip installed for this Python, beside the
+    # library's modules (legacy: in the add-on's folder, among the cores of other Pythons; extension: the wheel's).
+    installed_core = package.core_copy.core_file(os.path.dirname(package.api.__file__))
+    check(installed_core is not None and filecmp.cmp(core.__file__, installed_core, shallow=False),
+          f"the core loaded, {core.__file__}, is not the installed {installed_core}")
     if KIND == "extension":
         installed = glob.glob(os.path.join(user_dir, "extensions", ".local", "lib", "python*", "site-packages",
                                            "meniscus-*.dist-info"))

@@ -4,8 +4,8 @@
 # BLENDER is a Blender executable (/usr/bin/blender) or a Python whose environment has the `bpy` module from PyPI
 # (build/venv/bpy-4.5/bin/python). A fresh, empty user folder is made for the run (Blender's user resources: config,
 # scripts, extensions); install.py installs ZIP into it through Blender's own installer, then every
-# tests/blender/test_*.py runs in its own process and enables the installed add-on. Stops at the first failure and
-# shows the end of its log.
+# tests/blender/test_*.py (or the scripts MENISCUS_BLENDER_SCRIPTS names) runs in its own process and enables the
+# installed add-on. Stops at the first failure and shows the end of its log.
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/../.." && pwd)"
 blender="$1"
@@ -32,21 +32,43 @@ run_script() {  # run_script SCRIPT ARGS...: in a fresh process of this Blender
   fi
 }
 
-version="$(run_script "$repo/tests/blender/print_version.py" 2>/dev/null | sed -n 's/^BLENDER_VERSION //p')"
-echo "Blender $version: $kind zip $(basename "$zip")"
+echo "$kind zip $(basename "$zip") in $blender"
+# The scripts after install.py: every test_*.py, or those MENISCUS_BLENDER_SCRIPTS names ("test_bake uninstall": names
+# of scripts in tests/blender; for a quick rerun, or a step that runs a few, as tests/windows/run.sh's legacy zip).
+scripts=("$repo"/tests/blender/test_*.py)
+if [[ -n "${MENISCUS_BLENDER_SCRIPTS:-}" ]]; then
+  scripts=()
+  for name in $MENISCUS_BLENDER_SCRIPTS; do
+    [[ -f "$repo/tests/blender/$name.py" ]] || { echo "MENISCUS_BLENDER_SCRIPTS: no tests/blender/$name.py" >&2; exit 2; }
+    scripts+=("$repo/tests/blender/$name.py")
+  done
+  echo "only the scripts MENISCUS_BLENDER_SCRIPTS names: $MENISCUS_BLENDER_SCRIPTS"
+fi
+# A caller may leave scripts out by name, never silently: MENISCUS_BLENDER_NOT_RUN has one line per group,
+# "test_a test_b: why", and each one left out is printed with its group's reason (tests/windows/run.sh).
+not_run_reason() {  # not_run_reason NAME: the reason given for leaving NAME out, or nothing
+  local line
+  while IFS= read -r line; do
+    [[ -z "${line// /}" ]] && continue
+    [[ "$line" == *:* && -n "${line#*:}" ]] || { echo "MENISCUS_BLENDER_NOT_RUN: no reason in '$line'" >&2; exit 2; }
+    [[ " ${line%%:*} " == *" $1 "* ]] && { echo "${line#*: }"; return 0; }
+  done <<< "${MENISCUS_BLENDER_NOT_RUN:-}"
+  return 0
+}
 count=0
-for test in "$repo/tests/blender/install.py" "$repo"/tests/blender/test_*.py; do
+for test in "$repo/tests/blender/install.py" "${scripts[@]}"; do
   name="$(basename "$test" .py)"
-  # A caller may leave scripts out by name, never silently: MENISCUS_BLENDER_NOT_RUN="test_a test_b" with
-  # MENISCUS_BLENDER_NOT_RUN_REASON, printed for each (tests/windows/run.sh).
-  if [[ " ${MENISCUS_BLENDER_NOT_RUN:-} " == *" $name "* ]]; then
-    echo "NOT RUN $name: ${MENISCUS_BLENDER_NOT_RUN_REASON:?say why}"
+  reason="$(not_run_reason "$name")"
+  if [[ -n "$reason" ]]; then
+    echo "NOT RUN $name: $reason"
     continue
   fi
   log="$log_dir/$name.log"
   start=$SECONDS
   if run_script "$test" "$zip" "$kind" >"$log" 2>&1; then
     echo "PASS $name ($((SECONDS - start)) s): $(grep -E '^[0-9]+ passed' "$log" | tail -1)"
+    # install.py names the version (one start of Blender less: under Wine each costs seconds).
+    [[ "$name" == install ]] && version="$(sed -n 's/^BLENDER_VERSION //p' "$log")"
     count=$((count + 1))
   else
     echo "FAIL $name ($((SECONDS - start)) s); end of its log:"

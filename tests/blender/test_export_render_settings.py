@@ -17,8 +17,8 @@ from _support import check  # noqa: E402
 
 addon = _support.enable_addon()
 cache = addon.cache
-native_cache, update, app_handlers = _support.addon_modules(addon, "blender.native_cache", "blender.update",
-                                                           "blender.app_handlers")
+native_cache, update, app_handlers, busy_files = _support.addon_modules(
+    addon, "blender.native_cache", "blender.update", "blender.app_handlers", "busy_files")
 # ignore_cleanup_errors: on Windows Blender still holds the played .abc open at the end.
 _temporary = tempfile.TemporaryDirectory(prefix="meniscus_export_render_", ignore_cleanup_errors=True)
 FILES, BROKEN = _support.failing_sequence(_temporary.name)  # 30 missing, 31 truncated
@@ -152,7 +152,7 @@ def test_reexport_over_the_played_file():
         return
     export_with("EMPTY", 28, 29)
     settings.render_failure = "EMPTY"
-    replace, copyfile, wait = native_cache.os.replace, native_cache.shutil.copyfile, native_cache.REPLACE_WAIT_SECONDS
+    replace, copyfile, wait = native_cache.os.replace, native_cache.shutil.copyfile, busy_files.WAIT_SECONDS
 
     def refused(*_args):  # what Windows says while another process holds the file open
         raise PermissionError(13, "Permission denied")
@@ -178,7 +178,7 @@ def test_reexport_over_the_played_file():
         with open(ABC, "rb") as played:
             earlier = played.read(), evaluated_counts(28)
         native_cache.shutil.copyfile = refused
-        native_cache.REPLACE_WAIT_SECONDS = 0.3
+        busy_files.WAIT_SECONDS = 0.3
         native_cache.export_alembic(surface, scene, 28, 29, ABC)
     except native_cache.NativeCacheError as error:
         message = str(error)
@@ -186,7 +186,7 @@ def test_reexport_over_the_played_file():
         raise AssertionError("the export did not fail")
     finally:
         native_cache.os.replace, native_cache.shutil.copyfile = replace, copyfile
-        native_cache.REPLACE_WAIT_SECONDS = wait
+        busy_files.WAIT_SECONDS = wait
     check(f"{ABC} cannot be replaced (Permission denied; waited 0.3 s)" in message, message)
     check(sorted(os.listdir(os.path.dirname(ABC))) == [os.path.basename(ABC)], os.listdir(os.path.dirname(ABC)))
     with open(ABC, "rb") as played:

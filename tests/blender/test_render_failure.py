@@ -4,6 +4,8 @@ from the command line with exit status 1 and a message naming the file and the r
 
 Each render runs in a new process from a saved .blend, as a farm node does (`blender -b scene.blend -f 30`).
 """
+import contextlib
+import io
 import os
 import shutil
 import sys
@@ -102,6 +104,34 @@ def test_interactive_render_sets_the_failed_frames_image_aside():
     check(not os.path.exists(written[30]), f"the failed frame's image stays as if fine: {written[30]}")
     check(os.path.exists(written[30].replace(".png", ".meniscus-failed.png")), os.listdir(os.path.dirname(written[30])))
 
+
+def test_failed_frames_image_held_open_by_a_viewer():
+    # A viewer holding the new image open without delete sharing (Python's open shares none): Windows refuses the
+    # rename while it does, and the add-on waits for it (busy_files); held throughout, the console names the image and
+    # the time waited, and the image keeps its name. Elsewhere the rename is not refused.
+    render_policy, app_handlers, busy_files = _support.addon_modules(
+        addon, "blender.render_policy", "blender.app_handlers", "busy_files")
+    app_handlers.meniscus_render_init(scene)
+    render_policy.report_unstoppable_failure("Meniscus: surface 'x' cannot be built for frame 32: test", 32)
+    scene.frame_current = 32
+    path = bpy.path.abspath(scene.render.frame_path(frame=32))
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "wb") as image:
+        image.write(b"rendered without the surface")
+    printed, wait = io.StringIO(), busy_files.WAIT_SECONDS
+    busy_files.WAIT_SECONDS = 0.3
+    try:
+        with open(path, "rb"), contextlib.redirect_stdout(printed):
+            app_handlers.meniscus_render_write(scene)
+    finally:
+        busy_files.WAIT_SECONDS = wait
+    set_aside = path.replace(".png", ".meniscus-failed.png")
+    if os.name == "nt":
+        check(os.path.exists(path) and not os.path.exists(set_aside), os.listdir(os.path.dirname(path)))
+        check(f"its image {path} could not be renamed" in printed.getvalue() and "waited 0.3 s" in printed.getvalue(),
+              printed.getvalue())
+    else:
+        check(not os.path.exists(path) and os.path.exists(set_aside), os.listdir(os.path.dirname(path)))
 
 
 def test_interactive_stereo_render_sets_each_views_image_aside():

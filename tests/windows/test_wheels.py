@@ -5,6 +5,8 @@ tests/windows/check_wheel.py there, and compares what it wrote with the Linux bu
         --numpy NUMPY_WHEEL --linux-cli build/bin/meniscus [--quick]     (tests/windows/run.sh, in scripts/test.sh)
 
 --quick: only the install, `import meniscus` and the shared frame through the Python API (check_wheel.py --quick).
+--legacy-zip ZIP: also the legacy Blender zip unpacked and used as a library in that Python (check_legacy_addon.py):
+its core for this Python makes the Linux mesh; the add-on's replacement of files held open by another program.
 The meshes (Python API, console script, non-ASCII paths, the long path where Windows wrote it) must have the Linux
 mesh's triangles and its vertices within float tolerance; the readers must give the same particles. Needs WINEPREFIX.
 Exits non-zero with the reason on any failure.
@@ -16,6 +18,7 @@ import pathlib
 import subprocess
 import sys
 import tempfile
+import zipfile
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 SHARED = ROOT.parent / "shared" / "data"
@@ -51,6 +54,7 @@ def main():
     parser.add_argument("--numpy", required=True, help="the numpy win_amd64 wheel for that Python")
     parser.add_argument("--linux-cli", required=True)
     parser.add_argument("--quick", action="store_true", help="install, import and one frame through the API only")
+    parser.add_argument("--legacy-zip", help="the legacy Windows Blender zip, checked in this Python too")
     args = parser.parse_args()
     if "WINEPREFIX" not in os.environ:
         raise SystemExit("set WINEPREFIX (a Wine prefix under build/)")
@@ -83,6 +87,8 @@ def check(args):
             meshes.append("long-path.ply")
         for name in meshes:
             compare(linux_ply, out / name, f"Windows {name}")
+        if args.legacy_zip:
+            check_legacy_zip(args, folder, linux_ply)
         if args.quick:
             return
 
@@ -95,6 +101,15 @@ def check(args):
             if windows["count"] != linux["count"] or windows["attributes"] != linux["attributes"] or not same_sums:
                 raise SystemExit(f"reader on {name}: Windows {windows}, Linux {linux}")
         print(f"readers: the same particles as Linux in {len(windows_readers)} files")
+
+
+def check_legacy_zip(args, folder, linux_ply):
+    unpacked, out = folder / "legacy add-on", folder / "legacy out"
+    with zipfile.ZipFile(args.legacy_zip) as archive:
+        archive.extractall(unpacked)
+    print(wine(args.python, windows_path(ROOT / "tests" / "windows" / "check_legacy_addon.py"), windows_path(unpacked),
+               windows_path(SHARED / "splashsurf" / check_wheel.FRAME_NAME), windows_path(out)), end="")
+    compare(linux_ply, out / "legacy.ply", f"Windows {pathlib.Path(args.legacy_zip).name}")
 
 
 if __name__ == "__main__":

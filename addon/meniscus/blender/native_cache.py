@@ -16,16 +16,13 @@ with and without the add-on is the same file.
 import collections
 import os
 import shutil
-import time
 
 import bpy
 
+from .. import busy_files
 from . import mesh_update, render_policy, surfaces, update
 
 MODIFIER_NAME = "Meniscus Alembic"
-# How long an export waits for another program to let go of the file it replaces (a reader on Windows that shares
-# neither delete nor write access), as the core's writers wait: a reader's usual time.
-REPLACE_WAIT_SECONDS = 5.0
 
 
 class NativeCacheError(Exception):
@@ -147,9 +144,8 @@ def export_alembic(obj, scene, frame_start, frame_end, filepath=None):
         _move_into_place(writing, filepath)
     except OSError as error:
         _abandon(obj, writing, previous)
-        raise NativeCacheError(f"Not exported: {filepath} cannot be replaced ({error.strerror or error}; waited "
-                               f"{REPLACE_WAIT_SECONDS:g} s); close what holds it open (another Blender playing it) "
-                               "and export again") from error
+        raise NativeCacheError(f"Not exported: {filepath} cannot be replaced ({error.strerror or error}); close what "
+                               "holds it open (another Blender playing it) and export again") from error
     _play(obj, filepath)
     from_particles = record.built | {frame for frame, (_, held) in record.failed.items() if held is None}
     cube_size = obj.meniscus.render_cube_size if from_particles or not record.from_cache else None
@@ -161,22 +157,14 @@ def _move_into_place(writing, filepath):
     """Replaces filepath by the finished export. Windows refuses to rename over a file that a reader opened without
     delete sharing, and Blender keeps a played archive open a while after its data-block is gone: the finished file's
     contents are then written over the old one in place, as the exporter itself would write it. A reader that shares
-    no write access either (another program reading the file) is waited for, up to REPLACE_WAIT_SECONDS; then the
-    last refusal is raised."""
-    deadline = time.monotonic() + REPLACE_WAIT_SECONDS
-    while True:
-        try:
-            os.replace(writing, filepath)
-            return
-        except PermissionError:
-            try:
-                shutil.copyfile(writing, filepath)
-                os.remove(writing)
-                return
-            except PermissionError:
-                if time.monotonic() >= deadline:
-                    raise
-        time.sleep(0.1)
+    no write access either (another program reading the file) is waited for (busy_files.WAIT_SECONDS); then the last
+    refusal is raised."""
+    def write_over():
+        shutil.copyfile(writing, filepath)
+        os.remove(writing)
+        return True
+
+    busy_files.replace(writing, filepath, otherwise=write_over)
 
 
 def _abandon(obj, writing, previous):

@@ -18,6 +18,8 @@ import sys
 
 import bpy
 
+from .. import busy_files
+
 STOP, HOLD, EMPTY = "STOP", "HOLD", "EMPTY"
 ITEMS = [
     (STOP, "Stop the Render", "Stop the render with an error (command line and farms: Blender exits with status 1), "
@@ -90,9 +92,10 @@ def set_aside_failed_image(scene):
         root, extension = os.path.splitext(path)
         failed_path = root + FAILED_IMAGE_MARK + extension
         try:
-            os.replace(path, failed_path)
+            busy_files.replace(path, failed_path)  # an image viewer may have the new image open for a moment
         except OSError as error:
-            print(f"Meniscus: could not rename the failed frame's image {path}: {error}")
+            print(f"Meniscus: frame {frame} rendered without the surface, and its image {path} could not be renamed "
+                  f"to {failed_path} ({error.strerror or error}): do not use it")
             continue
         print(f"Meniscus: frame {frame} rendered without the surface; its image was renamed to {failed_path}")
         renamed.append(failed_path)
