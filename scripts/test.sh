@@ -17,16 +17,14 @@ section() { echo "== $* ($((SECONDS - started)) s)"; }
 # 120 s.
 export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-PASSIVE}"
 
-# What only downloads runs beside the builds, which use the cores: the Debian packages of the clang build (a job of
-# their own: the background builds below wait for it), the bpy wheels of the Blender suites (300-400 MB each) and the
-# benchmark's reference venv. The packages the development
+# What only downloads runs beside the builds, which use the cores: the Debian packages of the clang build, the bpy
+# wheels of the Blender suites (300-400 MB each) and the benchmark's reference venv. The packages the development
 # build and scripts/package.sh (mingw-w64 and Wine, for the Windows packages) need come first (their apt-get must not
 # wait for the other one's lock).
 require_packages "${MENISCUS_BUILD_PACKAGES[@]}" "${MENISCUS_WINDOWS_PACKAGES[@]}" blender xvfb
 mkdir -p build
-require_packages "${MENISCUS_CLANG_PACKAGES[@]}" > build/clang-packages.log 2>&1 &
-clang_packages=$!
 (
+  require_packages "${MENISCUS_CLANG_PACKAGES[@]}"
   for blender_version in 4.2 4.5 5.0 5.2; do bpy_venv "$blender_version" > /dev/null; done
   for blender_version in 4.5 5.2; do windows_bpy "$blender_version" > /dev/null; done  # for tests/windows/run.sh
   source bench/reference_venv.sh
@@ -35,19 +33,6 @@ downloads=$!
 wait_for_downloads() { wait "$downloads" || { echo "downloads failed:"; cat build/downloads.log; exit 1; }; }
 
 bash scripts/setup.sh
-
-# The clang/libc++ and sanitizer builds compile at the lowest priority beside everything below, on what it leaves idle
-# (Blender's and Wine's start-ups, downloads, single-threaded tests); their suites run at the end. One after the other
-# with -j2 each: their peak memory stays that of one build.
-wait "$clang_packages" || { echo "installing the clang packages failed:"; cat build/clang-packages.log; exit 1; }
-(
-  MENISCUS_STEPS=build nice -n 19 bash scripts/test_sanitizers.sh
-  MENISCUS_STEPS=build nice -n 19 bash scripts/build_clang.sh
-) > build/background-builds.log 2>&1 &
-background_builds=$!
-wait_for_background_builds() {
-  wait "$background_builds" || { echo "the clang or sanitizer build failed:"; tail -60 build/background-builds.log; exit 1; }
-}
 
 section "C++ tests (ctest)"
 /usr/bin/ctest --test-dir build --output-on-failure -j2
@@ -80,12 +65,11 @@ section "Windows packages under Wine: wheels in Windows CPython 3.10/3.11/3.13, 
 bash tests/windows/run.sh > build/windows-packages.log 2>&1 || { tail -60 build/windows-packages.log; exit 1; }
 grep -E "^== |^\(|^PASS|^NOT RUN|^all|passed under|refused|written|readers:" build/windows-packages.log
 section "clang++ with libc++ and libomp (macOS's toolchain)"
-wait_for_background_builds
-MENISCUS_STEPS=test bash scripts/build_clang.sh > build/clang.log 2>&1 || { tail -60 build/clang.log; exit 1; }
+bash scripts/build_clang.sh > build/clang.log 2>&1 || { tail -60 build/clang.log; exit 1; }
 grep -E "^All tests passed|^test cases|largest vertex difference|matches" build/clang.log
 
 section "C++ tests under AddressSanitizer + UBSan"
-MENISCUS_STEPS=test bash scripts/test_sanitizers.sh
+bash scripts/test_sanitizers.sh
 section "Benchmark against pysplashsurf, small version (both tools run, meshes valid; timings not judged in CI)"
 bash bench/compare.sh --quick
 section "all tests passed"

@@ -5,23 +5,18 @@
 #
 #   scripts/test_sanitizers.sh [Catch2 test spec ...]     e.g. scripts/test_sanitizers.sh "[io],[formats],[bad-input]"
 #
-# With no argument every test runs, one process per test case, in parallel (ctest). MENISCUS_STEPS=build only
-# builds, MENISCUS_STEPS=test only runs what an earlier build made (scripts/test.sh builds beside other suites).
+# With no argument every test runs, one process per test case, in parallel (ctest).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 build=build-asan
-steps="${MENISCUS_STEPS:-build test}"
-if [[ " $steps " == *" build "* ]]; then
-  # Only what the sanitizers must see: the core and the Catch2 suite (no CLI, no Python module). -O1 is what ASan is
-  # meant for (checks kept, a quicker compile than -O2); -g1 keeps the line tables the reports need without the full
-  # debug information, which made the RelWithDebInfo build of the suite take several times longer to compile.
-  /usr/bin/cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Sanitize -DCMAKE_CXX_FLAGS_SANITIZE="-O1 -g1" \
-    -DMENISCUS_SANITIZE=ON -DMENISCUS_BUILD_PYTHON=OFF -DMENISCUS_BUILD_CLI=OFF > "$build-configure.log" 2>&1 \
-    || { cat "$build-configure.log"; exit 1; }
-  /usr/bin/cmake --build "$build" -j"$(nproc)"
-fi
-[[ " $steps " == *" test "* ]] || exit 0
+# Only what the sanitizers must see: the core and the Catch2 suite (no CLI, no Python module). -O1 is what ASan is
+# meant for (checks kept, a quicker compile than -O2); -g1 keeps the line tables the reports need without the full
+# debug information, which made the RelWithDebInfo build of the suite take several times longer to compile.
+/usr/bin/cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Sanitize -DCMAKE_CXX_FLAGS_SANITIZE="-O1 -g1" \
+  -DMENISCUS_SANITIZE=ON -DMENISCUS_BUILD_PYTHON=OFF -DMENISCUS_BUILD_CLI=OFF > "$build-configure.log" 2>&1 \
+  || { cat "$build-configure.log"; exit 1; }
+/usr/bin/cmake --build "$build" -j"$(nproc)"
 
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
