@@ -89,3 +89,26 @@ def test_level_set_without_a_domain_is_refused():
     positions = np.random.default_rng(1).uniform(0, 1, size=(100, 3)).astype(np.float32)
     with pytest.raises(ValueError, match="fluid_surface is 1.*fluid domain"):
         meniscus.reconstruct(positions, 0.05, fluid_surface=1)
+
+
+def test_mantaflows_mesh_settings_are_taken_from_the_domain(bakes):
+    particles = meniscus.read_particles(bakes / "pool_UNI/cache/data/pp_0012.uni")
+    assert particles.fluid_domain["mesh_upres"] == 2 and particles.fluid_domain["mesh_particle_radius"] == 2.0  # Blender's
+    reference = mantaflow_volumes(bakes, "pool_UNI")[12]
+    coarse = meniscus.reconstruct(particles.positions, CELL / 2, fluid_domain={**particles.fluid_domain, "mesh_upres": 1}, threads=2)
+    assert coarse.stats["counts"]["level_set_cells"] == 32 * 32 * 24
+    # Mantaflow's radius is in the refined cells: at Upres Factor 1 its particles reach twice as far.
+    assert volume(coarse) > 1.02 * reference
+    larger = meniscus.reconstruct(particles.positions, CELL / 2, fluid_domain={**particles.fluid_domain, "mesh_particle_radius": 3.0}, threads=2)
+    default = meniscus.reconstruct(particles.positions, CELL / 2, fluid_domain=particles.fluid_domain, threads=2)
+    assert volume(larger) > volume(default)
+
+
+@pytest.mark.parametrize("key, value", [("mesh_upres", 0), ("mesh_particle_radius", -1.0), ("mesh_smoothen_pos", 101),
+                                        ("mesh_concave_lower", 5.0)])
+def test_bad_mesh_settings_are_refused_by_name(bakes, key, value):
+    particles = meniscus.read_particles(bakes / "pool_UNI/cache/data/pp_0005.uni")
+    with pytest.raises(ValueError, match=f"fluid_domain.{key}"):
+        meniscus.reconstruct(particles.positions, CELL / 2, fluid_domain={**particles.fluid_domain, key: value})
+    with pytest.raises(ValueError, match=r"fluid_domain\['mesh_upres'\] must be a whole number"):
+        meniscus.reconstruct(particles.positions, CELL / 2, fluid_domain={**particles.fluid_domain, "mesh_upres": "two"})
