@@ -102,6 +102,7 @@ PipelineResult level_set_pipeline(const PositionsView& positions, const std::vec
     stats.set_count("threads", threads);
     stats.set_count("particles", static_cast<double>(positions.count));
     if (positions.count == 0) stats.warnings.push_back("no particles: the mesh is empty");
+    finite_particles(positions, options.execution, &stats);  // refused, or left out by the level set when skipped
     ParticleLevelSetSurface surface;
     {
         StageTimer timer(&stats, "particle level set");

@@ -112,3 +112,21 @@ def test_bad_mesh_settings_are_refused_by_name(bakes, key, value):
         meniscus.reconstruct(particles.positions, CELL / 2, fluid_domain={**particles.fluid_domain, key: value})
     with pytest.raises(ValueError, match=r"fluid_domain\['mesh_upres'\] must be a whole number"):
         meniscus.reconstruct(particles.positions, CELL / 2, fluid_domain={**particles.fluid_domain, "mesh_upres": "two"})
+
+
+def test_nan_particles_are_refused_or_left_out_on_request(bakes):
+    particles = meniscus.read_particles(bakes / "splash_UNI/cache/data/pp_0010.uni")
+    positions = np.asarray(particles.positions).copy()
+    clean = meniscus.reconstruct(positions, CELL / 2, fluid_domain=particles.fluid_domain, threads=2)
+    positions[3] = np.nan
+    with pytest.raises(ValueError, match="NaN or Inf coordinates"):
+        meniscus.reconstruct(positions, CELL / 2, fluid_domain=particles.fluid_domain, threads=2)
+    skipped = meniscus.reconstruct(positions, CELL / 2, fluid_domain=particles.fluid_domain, threads=2, skip_invalid=True)
+    assert any("dropped 1 particles" in w for w in skipped.stats["warnings"])
+    assert np.isfinite(skipped.vertices).all() and abs(volume(skipped) / volume(clean) - 1.0) < 0.05
+
+
+def test_no_particles_give_an_empty_mesh(bakes):
+    particles = meniscus.read_particles(bakes / "pool_UNI/cache/data/pp_0010.uni")
+    mesh = meniscus.reconstruct(np.zeros((0, 3), dtype=np.float32), CELL / 2, fluid_domain=particles.fluid_domain, threads=2)
+    assert len(mesh.triangles) == 0 and any("no particles" in w for w in mesh.stats["warnings"])
