@@ -365,7 +365,7 @@ ParticleLevelSetSurface particle_level_set_surface(const PositionsView& position
         const float depth2 = float(kFillDepth * upres * kFillDepth * upres);
         std::vector<uint8_t> joined(static_cast<std::size_t>(g.cells), 0);
         // The closed borders' layer of solver cells (solid in the classification) is water too where it is deep
-        // enough: Mantaflow's level set reaches into it, and the bound above sets where the mesh ends.
+        // enough: Mantaflow's level set reaches into it, and the bound set after the extrapolation ends the mesh.
         const auto wall = [&](int i, int j, int k) {
             const int c[3] = {i / upres, j / upres, k / upres};
             for (int a = 0; a < 3; ++a)
