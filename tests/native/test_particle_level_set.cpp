@@ -2,6 +2,7 @@
 // particles that encloses what the band encloses, the same for any thread count, bad settings refused by name.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>

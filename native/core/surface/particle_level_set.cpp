@@ -1,10 +1,12 @@
 #include "surface/particle_level_set.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "base/errors.h"
 #include "base/memory.h"

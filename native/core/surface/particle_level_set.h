@@ -12,6 +12,7 @@
 //     Upres Factor layers, marching cubes at 0.
 // Vertex attributes are the same weighted particle mean at each vertex (the nearest particle's for whole numbers).
 #pragma once
+#include <array>
 #include <cstddef>
 #include <vector>
 
