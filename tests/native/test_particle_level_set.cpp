@@ -89,11 +89,15 @@ TEST_CASE("a drop's band gives one closed surface around it, near its particles"
 TEST_CASE("the level set's mesh is the same for any thread count", "[particle_level_set][threads]") {
     const FluidDomain domain = closed_domain();
     const std::vector<float> particles = drop_band();
-    const ParticleLevelSetSurface one = particle_level_set_surface(view(particles), {}, domain, 1, 0);
+    std::vector<float> index(particles.size() / 3);
+    for (std::size_t p = 0; p < index.size(); ++p) index[p] = float(p);
+    const std::vector<AttributeInput> attributes{{"index", index.data(), 1, false}, {"id", index.data(), 1, true}};
+    const ParticleLevelSetSurface one = particle_level_set_surface(view(particles), attributes, domain, 1, 0);
     for (int threads : {2, 3}) {
-        const ParticleLevelSetSurface many = particle_level_set_surface(view(particles), {}, domain, threads, 0);
+        const ParticleLevelSetSurface many = particle_level_set_surface(view(particles), attributes, domain, threads, 0);
         CHECK(many.mesh.vertices == one.mesh.vertices);
         CHECK(many.mesh.triangles == one.mesh.triangles);
+        for (std::size_t a = 0; a < attributes.size(); ++a) CHECK(many.mesh.attributes[a].values == one.mesh.attributes[a].values);
     }
 }
 

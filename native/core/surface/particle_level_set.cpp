@@ -415,6 +415,7 @@ ParticleLevelSetSurface particle_level_set_surface(const PositionsView& position
     for (const AttributeInput& a : attributes) mesh.attributes.push_back({a.name, a.components, std::vector<float>(vertex_count * a.components, 0.0f), a.integral});
     std::size_t components = 0;
     for (const AttributeInput& a : attributes) components += static_cast<std::size_t>(a.components);
+    std::vector<uint8_t> unweighed(vertex_count, 0);
     if (!attributes.empty())
         parallel_for(int64_t(vertex_count), threads, [&](int64_t v) {
             const Vec3 x{mesh.vertices[3 * v] + 0.5, mesh.vertices[3 * v + 1] + 0.5, mesh.vertices[3 * v + 2] + 0.5};
@@ -428,7 +429,10 @@ ParticleLevelSetSurface particle_level_set_surface(const PositionsView& position
                 for (const AttributeInput& a : attributes)
                     for (int k = 0; k < a.components; ++k) sums[o++] += w * a.values[std::size_t(a.components) * p + k];
             });
-            if (!(total > 0.0)) return;  // no particle near (the joined interior): zeros
+            if (!(total > 0.0)) {  // no particle near: on a wall under the band, where the joined interior meets it
+                unweighed[v] = 1;
+                return;
+            }
             std::size_t o = 0;
             for (std::size_t a = 0; a < attributes.size(); ++a) {
                 const AttributeInput& in = attributes[a];
@@ -437,6 +441,40 @@ ParticleLevelSetSurface particle_level_set_surface(const PositionsView& position
                         in.integral ? in.values[std::size_t(in.components) * heaviest_particle + k] : float(sums[o] / total);
             }
         }, 256);
+    // Those take the attributes of the particle nearest through the grid (a breadth-first search from the cells
+    // holding particles, in cell order: the same for any thread count), as the fill's particles do.
+    if (std::find(unweighed.begin(), unweighed.end(), uint8_t(1)) != unweighed.end()) {
+        std::vector<int32_t> source(static_cast<std::size_t>(g.cells), -1);
+        std::vector<int32_t> queue;
+        queue.reserve(static_cast<std::size_t>(g.cells));
+        for (int64_t c = 0; c < g.cells; ++c)
+            if (by_cell.end(c) > by_cell.begin(c)) {
+                source[c] = by_cell.items[by_cell.begin(c)];
+                queue.push_back(int32_t(c));
+            }
+        const int64_t steps[6] = {1, -1, g.sy, -g.sy, g.sz, -g.sz};
+        for (std::size_t q = 0; q < queue.size(); ++q) {
+            const int64_t c = queue[q];
+            const int64_t i = c % g.sy, j = (c / g.sy) % g.n[1], k = c / g.sz;
+            const bool open[6] = {i + 1 < g.n[0], i > 0, j + 1 < g.n[1], j > 0, k + 1 < g.n[2], k > 0};
+            for (int n = 0; n < 6; ++n)
+                if (open[n] && source[c + steps[n]] < 0) {
+                    source[c + steps[n]] = source[c];
+                    queue.push_back(int32_t(c + steps[n]));
+                }
+        }
+        for (std::size_t v = 0; v < vertex_count; ++v) {
+            if (!unweighed[v]) continue;
+            int cell[3];
+            for (int a = 0; a < 3; ++a) cell[a] = int(std::clamp(std::floor(mesh.vertices[3 * v + a] + 0.5), 0.0, double(g.n[a] - 1)));
+            const int32_t p = source[g.index(cell[0], cell[1], cell[2])];
+            if (p < 0) continue;
+            for (std::size_t a = 0; a < attributes.size(); ++a) {
+                const std::size_t k = static_cast<std::size_t>(attributes[a].components);
+                std::copy(attributes[a].values + k * p, attributes[a].values + k * (p + 1), mesh.attributes[a].values.begin() + k * v);
+            }
+        }
+    }
 
     // To world space: a cell centre of the refined grid at (index + 0.5) / upres solver cells. A mirroring domain
     // matrix turns the winding over.

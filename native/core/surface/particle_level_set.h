@@ -10,7 +10,8 @@
 //     Mantaflow joins its grid level set shrunk by a cell);
 //   - Mantaflow's simple extrapolation inside (band + 2 cells) and outside (3 cells), phi = 0.5 on the outer
 //     Upres Factor layers, marching cubes at 0.
-// Vertex attributes are the same weighted particle mean at each vertex (the nearest particle's for whole numbers).
+// Vertex attributes are the same weighted particle mean at each vertex (the heaviest particle's for whole numbers);
+// where no particle weighs (a wall under the band), the particle's nearest through the grid.
 #pragma once
 #include <array>
 #include <cstddef>
