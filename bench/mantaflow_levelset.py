@@ -1,6 +1,7 @@
-"""A numpy prototype (not the product) of the surface Mantaflow meshes, rebuilt from a cache's FLIP particles alone:
-does Mantaflow's own particle level set, at its defaults, reproduce the volume of Mantaflow's mesh (scene.json) frame
-by frame? It says whether the gap between our surface and Mantaflow's is reachable from the particles.
+"""A numpy prototype of the surface Mantaflow meshes (the product: native/core/surface/particle_level_set.cpp,
+fluid_surface), rebuilt from a cache's FLIP particles alone: does Mantaflow's own particle level set, at its defaults,
+reproduce the volume of Mantaflow's mesh (scene.json) frame by frame? It says whether the gap between our surface and
+Mantaflow's is reachable from the particles.
 
 Mantaflow's mesh step (Blender's liquid_script.h, Mantaflow's flip.cpp), as rebuilt here, in the mesh grid (the
 domain's grid refined by the Mesh panel's Upres Factor, Blender's default 2; lengths in its cells):

@@ -125,6 +125,14 @@ std::vector<ParameterSpec> make_schema() {
                           "FLIP particles): what the band encloses, bounded by the domain's walls and obstacles, is "
                           "filled with particles. 1: on (the particles must come with their fluid domain), 0: off; "
                           "automatic: on when they come from a narrow band (Mantaflow's cache)").done());
+    s.push_back(Spec::count("fluid_surface", &R::fluid_surface, surface).group("surface").label("Fluid Surface")
+                    .cli("--fluid-surface").range(0, 1).automatic(-1.0, "auto", 1.0)
+                    .help("Which surface a grid solver's liquid gets. 1: the one Mantaflow meshes itself (its particle "
+                          "level set on the domain's grid refined by the Mesh panel's Upres Factor, joined with the "
+                          "liquid the particles enclose; the particles must come with their fluid domain): the volume "
+                          "of Blender's own liquid mesh. 0: the particles' SPH surface, smoothed (Fill Interior fills "
+                          "a narrow band). Automatic: 1 when the particles come from a narrow band (Mantaflow's "
+                          "cache)").done());
 
     // ---- mesh (Sec. 3.3) --------------------------------------------------------------------------------------
     s.push_back(Spec::flag("decimate_barnacles", &P::decimate_barnacles, post).group("mesh").label("Remove Barnacles")

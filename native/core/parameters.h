@@ -24,6 +24,7 @@ struct ReconstructionParams {
     double cube_size = 0.5;         // c, marching-cubes cube edge as a multiple of r
     double iso_threshold = 0.6;     // t, inside where the colour field exceeds t
     int fill_interior = -1;         // narrow-band fill (sph/interior_fill.h): 1 on, 0 off, -1 when a narrow band's domain comes with the particles
+    int fluid_surface = -1;         // 1 Mantaflow's own level set (surface/particle_level_set.h), 0 the particles' SPH surface, -1 the level set for a narrow band's domain
 
     double compact_support() const { return 2.0 * smoothing_length * particle_radius; }
     double cube_edge() const { return cube_size * particle_radius; }

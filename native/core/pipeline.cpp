@@ -21,6 +21,7 @@
 #include "post/weights.h"
 #include "sph/interior_fill.h"
 #include "sph/interpolation.h"
+#include "surface/particle_level_set.h"
 #include "surface/reconstruction.h"
 
 namespace meniscus {
@@ -37,12 +38,19 @@ struct FilledParticles {
     PositionsView view;
 };
 
-bool wants_fill(const PipelineOptions& options) {
-    const int fill = options.reconstruction.fill_interior;
-    if (fill == 1 && !options.fluid_domain)
-        throw InputError("fill_interior is on, but the particles come without their fluid domain (a grid solver's cache such as "
-                         "Mantaflow's carries one): use automatic or off");
-    return options.fluid_domain && (fill == 1 || (fill == -1 && narrow_band_domain(*options.fluid_domain)));
+// Whether a setting that is 1 on, 0 off and -1 automatic (on for a narrow band's domain) is on; InputError, starting
+// with `on_text`, when it is on and the particles come without their fluid domain.
+bool on_for_narrow_band(int setting, const char* on_text, const PipelineOptions& options) {
+    if (setting == 1 && !options.fluid_domain)
+        throw InputError(std::string(on_text) + ", but the particles come without their fluid domain (a grid solver's cache such as "
+                         "Mantaflow's carries one): use automatic or 0");
+    return options.fluid_domain && (setting == 1 || (setting == -1 && narrow_band_domain(*options.fluid_domain)));
+}
+
+bool wants_fill(const PipelineOptions& options) { return on_for_narrow_band(options.reconstruction.fill_interior, "fill_interior is on", options); }
+
+bool wants_level_set(const PipelineOptions& options) {
+    return on_for_narrow_band(options.reconstruction.fluid_surface, "fluid_surface is 1 (Mantaflow's level set)", options);
 }
 
 void fill_narrow_band(const PositionsView& positions, const std::vector<AttributeInput>& attributes, const PipelineOptions& options,
@@ -84,6 +92,49 @@ void fill_narrow_band(const PositionsView& positions, const std::vector<Attribut
     }
 }
 
+// Mantaflow's own surface (surface/particle_level_set.h) and the stages that keep it Mantaflow's: no cleanup,
+// decimation or smoothing (Mantaflow does not smooth its mesh after marching cubes, and the smoothing's reach
+// would take volume from it), normals and attributes as on every mesh, the open mesh box, quads.
+PipelineResult level_set_pipeline(const PositionsView& positions, const std::vector<AttributeInput>& attributes, const PipelineOptions& options,
+                                  int threads) {
+    PipelineResult result;
+    PipelineStats& stats = result.stats;
+    stats.set_count("threads", threads);
+    stats.set_count("particles", static_cast<double>(positions.count));
+    if (positions.count == 0) stats.warnings.push_back("no particles: the mesh is empty");
+    finite_particles(positions, options.execution, &stats);  // refused, or left out by the level set when skipped
+    ParticleLevelSetSurface surface;
+    {
+        StageTimer timer(&stats, "particle level set");
+        surface = particle_level_set_surface(positions, attributes, *options.fluid_domain, threads, options.execution.memory_budget_bytes());
+    }
+    stats.set_count("level_set_cells", double(surface.resolution[0]) * surface.resolution[1] * surface.resolution[2]);
+    stats.set_count("level_set_joined_cells", static_cast<double>(surface.joined_cells));
+    TriMesh mesh = std::move(surface.mesh);
+    if (options.keep_raw_mesh) result.raw_mesh = mesh;
+    const PostprocessParams& post = options.postprocess;
+    if (post.normals) {
+        StageTimer timer(&stats, "normals");
+        const MeshAdjacency adjacency = build_adjacency(mesh, threads);
+        mesh.normals = smoothed_vertex_normals(mesh, adjacency, post.normal_smoothing_iterations, SmoothedNormals{}, threads);
+    }
+    const ContainerParams& container = options.container;
+    if (container.mesh_aabb_min && container.mesh_aabb_max && !container.mesh_aabb_cap) {
+        StageTimer timer(&stats, "container");
+        stats.set_count("container_removed_triangles", static_cast<double>(cut_open_at_box(
+                                                           mesh, *container.mesh_aabb_min, *container.mesh_aabb_max, container.mesh_aabb_clamp_verts)));
+    }
+    if (post.generate_quads) {
+        StageTimer timer(&stats, "quads");
+        const QuadCriteria criteria{post.quad_max_edge_diag_ratio, post.quad_max_normal_angle, post.quad_max_interior_angle};
+        stats.set_count("quads", static_cast<double>(merge_triangles_into_quads(mesh, criteria, threads)));
+    }
+    stats.set_count("vertices", static_cast<double>(mesh.num_vertices()));
+    stats.set_count("triangles", static_cast<double>(mesh.num_triangles()));
+    result.mesh = std::move(mesh);
+    return result;
+}
+
 }  // namespace
 
 PipelineResult run_pipeline(const PositionsView& given_positions, const std::vector<AttributeInput>& given_attributes, const PipelineOptions& options) {
@@ -94,6 +145,7 @@ PipelineResult run_pipeline(const PositionsView& given_positions, const std::vec
         chosen.execution.threads = automatic_frame_threads();
         return run_pipeline(given_positions, given_attributes, chosen);
     }
+    if (wants_level_set(options)) return level_set_pipeline(given_positions, given_attributes, options, resolve_threads(options.execution.threads));
     PipelineResult result;
     // The narrow-band fill: solid water from a shell of particles, before anything else sees them.
     FilledParticles filled;

@@ -210,12 +210,14 @@ T domain_field(const py::dict& values, const char* key, const char* expected, T 
 // The dict's values without the checks a fill needs (a provenance record describes whatever was given).
 FluidDomain fluid_domain_fields_from_python(const py::dict& values) {
     static const char* const keys[] = {"origin", "axes", "resolution", "closed_borders", "gravity", "band_width_cells", "obstacles",
-                                       "object_to_world"};
+                                       "object_to_world", "mesh_upres", "mesh_particle_radius", "mesh_smoothen_pos", "mesh_smoothen_neg",
+                                       "mesh_concave_lower", "mesh_concave_upper"};
     for (const auto& item : values) {
         const std::string key = py::str(item.first);
         if (std::find_if(std::begin(keys), std::end(keys), [&](const char* k) { return key == k; }) == std::end(keys))
             throw InputError("fluid_domain has no key '" + key + "' (the keys are: origin, axes, resolution, closed_borders, gravity, "
-                             "band_width_cells, obstacles, object_to_world)");
+                             "band_width_cells, obstacles, object_to_world, mesh_upres, mesh_particle_radius, mesh_smoothen_pos, "
+                             "mesh_smoothen_neg, mesh_concave_lower, mesh_concave_upper)");
     }
     FluidDomain d;
     d.origin = domain_field(values, "origin", "three numbers", d.origin);
@@ -225,6 +227,12 @@ FluidDomain fluid_domain_fields_from_python(const py::dict& values) {
     d.gravity = domain_field(values, "gravity", "three numbers", d.gravity);
     d.band_width_cells = domain_field(values, "band_width_cells", "a number", d.band_width_cells);
     d.object_to_world = domain_field(values, "object_to_world", "sixteen numbers (a 4x4 matrix, column-major)", d.object_to_world);
+    d.mesh_upres = domain_field(values, "mesh_upres", "a whole number (Mantaflow's Upres Factor)", d.mesh_upres);
+    d.mesh_particle_radius = domain_field(values, "mesh_particle_radius", "a number", d.mesh_particle_radius);
+    d.mesh_smoothen_pos = domain_field(values, "mesh_smoothen_pos", "a whole number", d.mesh_smoothen_pos);
+    d.mesh_smoothen_neg = domain_field(values, "mesh_smoothen_neg", "a whole number", d.mesh_smoothen_neg);
+    d.mesh_concave_lower = domain_field(values, "mesh_concave_lower", "a number", d.mesh_concave_lower);
+    d.mesh_concave_upper = domain_field(values, "mesh_concave_upper", "a number", d.mesh_concave_upper);
     if (values.contains("obstacles"))
         for (const auto& soup : values["obstacles"].cast<py::list>()) {
             const py::array_t<float, py::array::c_style | py::array::forcecast> triangles(py::reinterpret_borrow<py::object>(soup));
@@ -248,6 +256,12 @@ py::dict fluid_domain_to_python(const FluidDomain& d) {
     out["gravity"] = d.gravity;
     out["band_width_cells"] = d.band_width_cells;
     out["object_to_world"] = d.object_to_world;
+    out["mesh_upres"] = d.mesh_upres;
+    out["mesh_particle_radius"] = d.mesh_particle_radius;
+    out["mesh_smoothen_pos"] = d.mesh_smoothen_pos;
+    out["mesh_smoothen_neg"] = d.mesh_smoothen_neg;
+    out["mesh_concave_lower"] = d.mesh_concave_lower;
+    out["mesh_concave_upper"] = d.mesh_concave_upper;
     py::list obstacles;
     for (const std::vector<float>& soup : d.obstacles) obstacles.append(to_numpy(std::vector<float>(soup), {py::ssize_t(soup.size() / 9), 3, 3}));
     out["obstacles"] = obstacles;

@@ -159,6 +159,9 @@ def test_the_fluid_domain_for_the_narrow_band_fill():
     check(built["closed_borders"] == [True] * 5 + [False], built["closed_borders"])
     check(np.allclose(built["gravity"], [0, 0, -1]), built["gravity"])
     check(built["band_width_cells"] == SCENE["particle_band_width"], built["band_width_cells"])
+    # The Mesh panel's settings at Blender's defaults (bake_scene.py leaves them), for Mantaflow's own surface.
+    check([built[k] for k in ("mesh_upres", "mesh_particle_radius", "mesh_smoothen_pos", "mesh_smoothen_neg")] == [2, 2.0, 1, 1], built)
+    check(abs(built["mesh_concave_lower"] - 0.4) < 1e-6 and built["mesh_concave_upper"] == 3.5, built)
     # One obstacle, the 0.4 m box at (0.5, 0.3, 0.25): 12 triangles in world space.
     check(len(built["obstacles"]) == 1 and len(built["obstacles"][0]) == 12 * 9, [len(o) for o in built["obstacles"]])
     corners = np.array(built["obstacles"][0]).reshape(-1, 3)

@@ -309,6 +309,7 @@ TEST_CASE("the pipeline fills a narrow band into solid water, on request or by i
     const PipelineResult hollow = run_pipeline(view(particles), {}, options);  // no domain: the band alone
 
     options.fluid_domain = &domain;
+    options.reconstruction.fluid_surface = 0;  // the SPH surface (automatic would take Mantaflow's level set)
     const PipelineResult solid = run_pipeline(view(particles), {}, options);  // automatic: a narrow band, filled
     // The pool: 22 x 22 cells inside the walls, about 11 cells deep (the band's top at 12, the floor's wall at 1).
     const double pool = 22 * 22 * 11 * kCell * kCell * kCell;

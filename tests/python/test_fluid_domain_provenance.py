@@ -33,7 +33,9 @@ def test_the_fluid_domain_is_part_of_the_record(tmp_path):
     assert cache.stale_reason(str(mesh), cache.provenance(str(source), {**arguments, "fluid_domain": domain()})) == ""
     moved = [np.arange(9, dtype=np.float32) + 0.5]
     for changed in (domain(closed_borders=[True] * 5 + [False]), domain(band_width_cells=5.0), domain(obstacles=moved),
-                    domain(gravity=[0.0, -1.0, 0.0]), domain(object_to_world=IDENTITY[:12] + [1.0, 0, 0, 1.0])):
+                    domain(gravity=[0.0, -1.0, 0.0]), domain(object_to_world=IDENTITY[:12] + [1.0, 0, 0, 1.0]),
+                    domain(mesh_upres=3), domain(mesh_particle_radius=1.5), domain(mesh_smoothen_neg=0),
+                    domain(mesh_concave_upper=3.0)):
         reason = cache.stale_reason(str(mesh), cache.provenance(str(source), {**arguments, "fluid_domain": changed}))
         assert reason.startswith("made with another fluid domain"), (changed, reason)
     assert cache.stale_reason(str(mesh), cache.provenance(str(source), {"particle_radius": 0.03})) == \

@@ -350,8 +350,9 @@ def fluid_domain(obj, scene, depsgraph=None, placement=None, frame=None, scene_f
     """The fluid domain for the core's narrow-band fill (the keys of FluidDomain, native/core/sph/fluid_domain.h):
     the grid's placement (origin, axes, resolution) as the reader found it in the cache's config, and what only the
     domain's settings say: which borders are walls, gravity, how deep the band of particles reaches, obstacles (where
-    they were at `frame`, the cache frame; default the current frame) and the domain object's matrix at
-    `scene_frame` (default the current frame; column-major, as the cache's config keeps it)."""
+    they were at `frame`, the cache frame; default the current frame), the domain object's matrix at
+    `scene_frame` (default the current frame; column-major, as the cache's config keeps it) and the Mesh panel's
+    settings (Upres Factor, particle radius, smoothing, concavity)."""
     settings = domain_settings(obj)
     scene_frame = scene.frame_current if scene_frame is None else scene_frame
     evaluated = sources.evaluated(obj, depsgraph)
@@ -363,6 +364,13 @@ def fluid_domain(obj, scene, depsgraph=None, placement=None, frame=None, scene_f
         band_width_cells=float(settings.particle_band_width),
         obstacles=obstacle_triangles(obj, scene, depsgraph, frame),
         object_to_world=matrix.T.reshape(-1).tolist(),
+        # The Mesh panel's settings, for Mantaflow's own surface (Fluid Surface automatic or 1).
+        mesh_upres=int(settings.mesh_scale),
+        mesh_particle_radius=float(settings.mesh_particle_radius),
+        mesh_smoothen_pos=int(settings.mesh_smoothen_pos),
+        mesh_smoothen_neg=int(settings.mesh_smoothen_neg),
+        mesh_concave_lower=float(settings.mesh_concave_lower),
+        mesh_concave_upper=float(settings.mesh_concave_upper),
     )
     return domain
 

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cinttypes>
+#include <initializer_list>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -74,6 +75,9 @@ std::string digest_of(const FluidDomain& d) {
     for (double v : d.gravity) number(v);
     number(d.band_width_cells);
     for (double v : d.object_to_world) number(v);
+    for (double v : {double(d.mesh_upres), d.mesh_particle_radius, double(d.mesh_smoothen_pos), double(d.mesh_smoothen_neg), d.mesh_concave_lower,
+                     d.mesh_concave_upper})
+        number(v);
     for (const std::vector<float>& soup : d.obstacles) {
         number(static_cast<double>(soup.size()));  // where one obstacle ends and the next begins
         hash = fnv1a(hash, soup.data(), soup.size() * sizeof(float));
@@ -198,7 +202,7 @@ std::string provenance_mismatch(const std::string& mesh_path, const std::string&
             const std::string* had = find(found, key);
             if (had && *had == value) continue;
             if (key == "fluid_domain")  // a digest says nothing to a person: what it covers does
-                return "made with another fluid domain (its borders, narrow band, gravity, grid, obstacles or place)";
+                return "made with another fluid domain (its borders, narrow band, gravity, grid, obstacles, place or mesh settings)";
             const std::string name = parameter ? key.substr(10) : "interpolated attributes";
             return "made with " + name + " " + (had ? readable(*had) : "unknown") + ", now " + readable(value);
         }

@@ -20,6 +20,16 @@ struct FluidDomain {
     double band_width_cells = 0.0;  // particles are kept only this deep under the surface; 0: the whole liquid
     // Solid obstacles as world-space triangle soups (x y z of each corner, 9 floats per triangle); may be empty.
     std::vector<std::vector<float>> obstacles;
+    // Mantaflow's Mesh panel (Blender's FluidDomainSettings, defaults Blender's): the level set it meshes lies on the
+    // domain's grid refined by mesh_upres; the particle radius is in the refined grid's cells (of which Mantaflow
+    // takes half a cell diagonal, plus 1 %); smoothing passes that average and that only lower; the concavity
+    // correction's eigenvalue range (surface/particle_level_set.h). The caches do not hold them.
+    int mesh_upres = 2;
+    double mesh_particle_radius = 2.0;
+    int mesh_smoothen_pos = 1;
+    int mesh_smoothen_neg = 1;
+    double mesh_concave_lower = 0.4;
+    double mesh_concave_upper = 3.5;
     // The domain object's matrix that places the grid (column-major, Blender's object_to_world): a cache reader sets
     // the one the frame was simulated with. The fill does not read it; the add-on moves a frame read from the cache
     // to where the domain is now, as Blender's own fluid mesh follows the domain object.

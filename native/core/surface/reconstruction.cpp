@@ -19,22 +19,6 @@ bool finite_position(const PositionsView& positions, std::size_t i) {
     return std::isfinite(positions.coord(i, 0)) && std::isfinite(positions.coord(i, 1)) && std::isfinite(positions.coord(i, 2));
 }
 
-// Non-finite positions: refused with a count, or dropped when the caller asked for it. Returns the particles to
-// keep (empty: all).
-std::vector<uint8_t> finite_particles(const PositionsView& positions, const ExecutionOptions& execution, PipelineStats* stats) {
-    std::size_t invalid = 0, first_invalid = 0;
-    for (std::size_t i = 0; i < positions.count; ++i)
-        if (!finite_position(positions, i) && invalid++ == 0) first_invalid = i;
-    if (invalid == 0) return {};
-    if (!execution.skip_invalid)
-        throw InputError(std::to_string(invalid) + " of " + std::to_string(positions.count) +
-                         " particles have NaN or Inf coordinates (the first is particle " + std::to_string(first_invalid) +
-                         "); pass skip_invalid (--skip-invalid) to drop them");
-    std::vector<uint8_t> keep(positions.count);
-    for (std::size_t i = 0; i < positions.count; ++i) keep[i] = finite_position(positions, i);
-    if (stats) stats->warnings.push_back("dropped " + std::to_string(invalid) + " particles with NaN or Inf coordinates");
-    return keep;
-}
 
 // Particles outside the container's particle box: dropped, with a count and a warning when none are left. Combines
 // with `keep` (the finite particles; empty: all). Returns the particles to keep (empty: all).
@@ -82,6 +66,21 @@ double estimate_mesh_bytes(const ParticleGrid& grid, double cube_edge, int threa
 }
 
 }  // namespace
+
+std::vector<uint8_t> finite_particles(const PositionsView& positions, const ExecutionOptions& execution, PipelineStats* stats) {
+    std::size_t invalid = 0, first_invalid = 0;
+    for (std::size_t i = 0; i < positions.count; ++i)
+        if (!finite_position(positions, i) && invalid++ == 0) first_invalid = i;
+    if (invalid == 0) return {};
+    if (!execution.skip_invalid)
+        throw InputError(std::to_string(invalid) + " of " + std::to_string(positions.count) +
+                         " particles have NaN or Inf coordinates (the first is particle " + std::to_string(first_invalid) +
+                         "); pass skip_invalid (--skip-invalid) to drop them");
+    std::vector<uint8_t> keep(positions.count);
+    for (std::size_t i = 0; i < positions.count; ++i) keep[i] = finite_position(positions, i);
+    if (stats) stats->warnings.push_back("dropped " + std::to_string(invalid) + " particles with NaN or Inf coordinates");
+    return keep;
+}
 
 SurfaceReconstruction reconstruct_surface(const PositionsView& positions, const ReconstructionParams& params,
                                           const ExecutionOptions& execution, PipelineStats* stats, const ContainerParams* container) {

@@ -5,6 +5,7 @@
 // thread count. The grid and the densities stay with the result: the feature weights, the SPH normals and the
 // attribute transfer sample the same particles (Sec. 4).
 #pragma once
+#include <cstdint>
 #include <vector>
 
 #include "base/stats.h"
@@ -32,6 +33,10 @@ struct SurfaceReconstruction {
 // stages' seconds ("neighborhood", "density", "level set and marching cubes") and counts to stats when given.
 // With a container: particles outside its particle box are left out (counted as "particles_outside_box"), and with a
 // capped mesh box the surface is closed against the box's walls (bricks.h, MeshBox).
+// Non-finite positions: InputError with a count, or dropped (a warning in stats) when execution.skip_invalid.
+// Returns the particles to keep (empty: all).
+std::vector<uint8_t> finite_particles(const PositionsView& positions, const ExecutionOptions& execution, PipelineStats* stats);
+
 SurfaceReconstruction reconstruct_surface(const PositionsView& positions, const ReconstructionParams& params,
                                           const ExecutionOptions& execution, PipelineStats* stats = nullptr,
                                           const ContainerParams* container = nullptr);
