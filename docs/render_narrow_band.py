@@ -23,16 +23,17 @@ particles = meniscus.read_particles(cache / f"data/pp_{args.frame:04d}.uni")
 domain = {**particles.fluid_domain, "band_width_cells": 3.0}  # Blender's default band (the cache does not say)
 cell = domain["axes"][0][0]
 settings = dict(iso_threshold=0.45, fluid_domain=domain)  # as tests/python/test_interior_fill.py
-surfaces = [("band alone", meniscus.reconstruct(particles.positions, cell / 2, fill_interior=0, **settings)),
-            ("filled", meniscus.reconstruct(particles.positions, cell / 2, **settings)),
+surfaces = [("band alone", meniscus.reconstruct(particles.positions, cell / 2, fluid_surface=0, fill_interior=0, **settings)),
+            ("filled", meniscus.reconstruct(particles.positions, cell / 2, fluid_surface=0, **settings)),
+            ("level set", meniscus.reconstruct(particles.positions, cell / 2, fluid_domain=domain)),
             ("Mantaflow", meniscus.read_mesh(cache / f"mesh/fluid_mesh_{args.frame:04d}.bobj.gz"))]
 
-scene = render_scene.cycles_scene(args.samples, 1080, 330)
+scene = render_scene.cycles_scene(args.samples, 1440, 330)
 water = render_scene.water_material()
 
 for index, (name, mesh) in enumerate(surfaces):
     data = bpy.data.meshes.new(name)
-    mesh_update.write_surface(data, np.asarray(mesh.vertices, dtype=np.float32) + np.float32([2.3 * (index - 1), 0, 0]),
+    mesh_update.write_surface(data, np.asarray(mesh.vertices, dtype=np.float32) + np.float32([2.3 * (index - 1.5), 0, 0]),
                               np.asarray(mesh.triangles, dtype=np.int32), mesh.normals)
     for polygon in data.polygons:
         polygon.use_smooth = mesh.normals is not None
@@ -40,8 +41,8 @@ for index, (name, mesh) in enumerate(surfaces):
     obj.data.materials.append(water)
     scene.collection.objects.link(obj)
 
-# In front of the three and below the floor (z = 0), looking up at their undersides.
-render_scene.add_camera(scene, (0.0, -12.0, -1.5), (0.0, 0.0, 0.45), 55)
+# In front of the four and below the floor (z = 0), looking up at their undersides.
+render_scene.add_camera(scene, (0.0, -16.0, -2.0), (0.0, 0.0, 0.45), 55)
 render_scene.add_sun(scene, (-70, 0, 30))
 scene.render.image_settings.color_depth = "8"
 scene.render.image_settings.compression = 100
