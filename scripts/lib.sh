@@ -121,7 +121,7 @@ mingw_cmake_arguments() {
 
 # Build tools every build needs (Debian 12), and those of the two portability builds.
 MENISCUS_BUILD_PACKAGES=(build-essential cmake ccache pybind11-dev catch2 libcli11-dev nlohmann-json3-dev zlib1g-dev
-                         python3-dev python3-numpy python3-pytest python3-venv)
+                         python3-dev python3-numpy python3-pytest python3-pytest-xdist python3-venv)
 MENISCUS_CLANG_PACKAGES=(clang libc++-dev libc++abi-dev libomp-dev catch2 libcli11-dev nlohmann-json3-dev zlib1g-dev)
 MENISCUS_WINDOWS_PACKAGES=(g++-mingw-w64-x86-64-posix libz-mingw-w64-dev wine64 catch2 libcli11-dev nlohmann-json3-dev)
 

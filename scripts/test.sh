@@ -47,7 +47,9 @@ section "Mantaflow caches baked by Blender 3.4 (tests/mantaflow/bake.sh)"
 bash tests/mantaflow/bake.sh /usr/bin/blender
 
 section "Python tests (pytest: API, CLI, quality, packages)"
-/usr/bin/python3 -m pytest -q --durations=10 tests/python
+# One worker per core (pytest-xdist), each test file in one worker: the files' module fixtures (a baked sequence, a
+# reconstructed frame) are then made once, as in one process.
+/usr/bin/python3 -m pytest -q --durations=10 -n "$(nproc)" --dist loadfile tests/python
 
 wait_for_downloads
 

@@ -61,6 +61,21 @@ done
 # suite looks for them under MENISCUS_BUILD, which here names the mingw-w64 build.
 MENISCUS_BUILD=build bash tests/mantaflow/bake.sh /usr/bin/blender > /dev/null
 ln -sfn "$PWD/build/mantaflow" build-windows/mantaflow
+# One Wine session for the Blender suites, which run their scripts side by side (tests/blender/run.sh): its server and
+# system services (services.exe, rpcss, ...) start here, once, with no script's output as theirs. Started by a
+# script's process they keep its stderr, the pipe that tests/windows/python-wine reads to its end, open for as long as
+# they live, and that script looked hung for minutes. Debian's Wine finds the server under TMPDIR: the suites' own.
+wine_session() {  # wine_session start|stop
+  if [ "$1" = start ]; then
+    TMPDIR="$profile" /usr/lib/wine/wineserver -p < /dev/null > /dev/null 2>&1 || true  # Wine 8's exits 2 on success
+    : | TMPDIR="$profile" /usr/lib/wine/wine64 cmd /c exit > /dev/null 2>&1
+  else
+    TMPDIR="$profile" /usr/lib/wine/wineserver -k 2> /dev/null || true
+  fi
+}
+trap 'wine_session stop' EXIT
+wine_session start
+
 # blender_suite VERSION ZIP KIND: tests/blender/run.sh with ZIP installed into the Windows bpy VERSION, in its Windows
 # CPython under Wine (MENISCUS_BLENDER_SCRIPTS and MENISCUS_BLENDER_NOT_RUN pass through).
 blender_suite() {
