@@ -12,6 +12,9 @@ if ! command -v "$blender" > /dev/null; then
   exit 1
 fi
 mkdir -p "$out_root"
+# One baker at a time (pytest's workers each ask for the caches): a second would remove the first's half-made bake.
+exec 9> "$out_root/.bake.lock"
+flock 9
 started=$SECONDS
 for job in pool:UNI open_top:UNI moving_obstacle:UNI splash:UNI pool:OPENVDB; do
   scene="${job%%:*}" format="${job##*:}"
