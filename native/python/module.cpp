@@ -214,10 +214,10 @@ FluidDomain fluid_domain_fields_from_python(const py::dict& values) {
                                        "mesh_concave_lower", "mesh_concave_upper"};
     for (const auto& item : values) {
         const std::string key = py::str(item.first);
-        if (std::find_if(std::begin(keys), std::end(keys), [&](const char* k) { return key == k; }) == std::end(keys))
-            throw InputError("fluid_domain has no key '" + key + "' (the keys are: origin, axes, resolution, closed_borders, gravity, "
-                             "band_width_cells, obstacles, object_to_world, mesh_upres, mesh_particle_radius, mesh_smoothen_pos, "
-                             "mesh_smoothen_neg, mesh_concave_lower, mesh_concave_upper)");
+        if (std::find_if(std::begin(keys), std::end(keys), [&](const char* k) { return key == k; }) != std::end(keys)) continue;
+        std::string known;  // from the same list, so that the message names every key the check accepts
+        for (const char* k : keys) known += (known.empty() ? "" : ", ") + std::string(k);
+        throw InputError("fluid_domain has no key '" + key + "' (the keys are: " + known + ")");
     }
     FluidDomain d;
     d.origin = domain_field(values, "origin", "three numbers", d.origin);
