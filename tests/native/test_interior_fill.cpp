@@ -10,6 +10,7 @@
 #include <limits>
 #include <vector>
 
+#include "band_particles.h"
 #include "base/errors.h"
 #include "pipeline.h"
 #include "sph/interior_fill.h"
@@ -28,25 +29,9 @@ FluidDomain closed_domain(int n) {
     return d;
 }
 
-// 2 x 2 x 2 particles in every cell whose centre (in cells) passes `keep`, jittered a little (deterministically).
+// 2 x 2 x 2 jittered particles in every cell whose centre (in cells) passes `keep`.
 std::vector<float> particles_where(int n, const std::function<bool(double, double, double)>& keep) {
-    std::vector<float> out;
-    uint32_t state = 12345u;
-    const auto jitter = [&] {
-        state = state * 1664525u + 1013904223u;
-        return ((state >> 8) / double(1u << 24) - 0.5) * 0.2;
-    };
-    for (int k = 0; k < n; ++k)
-        for (int j = 0; j < n; ++j)
-            for (int i = 0; i < n; ++i) {
-                if (!keep(i + 0.5, j + 0.5, k + 0.5)) continue;
-                for (int s = 0; s < 8; ++s) {
-                    const double x = i + 0.25 + 0.5 * (s & 1) + jitter(), y = j + 0.25 + 0.5 * ((s >> 1) & 1) + jitter(),
-                                 z = k + 0.25 + 0.5 * (s >> 2) + jitter();
-                    out.insert(out.end(), {float(x * kCell), float(y * kCell), float(z * kCell)});
-                }
-            }
-    return out;
+    return test::band_particles(n, kCell, 12345u, keep);
 }
 
 PositionsView view(const std::vector<float>& p) { return PositionsView(p.data(), p.size() / 3); }

@@ -8,6 +8,7 @@
 #include <limits>
 #include <vector>
 
+#include "band_particles.h"
 #include "base/errors.h"
 #include "mesh/components.h"
 #include "mesh/topology.h"
@@ -32,22 +33,10 @@ FluidDomain closed_domain() {
 // A drop of radius 7 cells at the domain's centre, as a narrow band keeps it: 2 x 2 x 2 particles in each cell whose
 // centre lies in its outer 2 cells, jittered a little (deterministically).
 std::vector<float> drop_band() {
-    std::vector<float> out;
-    uint32_t state = 777u;
-    const auto jitter = [&] {
-        state = state * 1664525u + 1013904223u;
-        return ((state >> 8) / double(1u << 24) - 0.5) * 0.2;
-    };
-    for (int k = 0; k < kCells; ++k)
-        for (int j = 0; j < kCells; ++j)
-            for (int i = 0; i < kCells; ++i) {
-                const double r = std::sqrt((i + 0.5 - 10) * (i + 0.5 - 10) + (j + 0.5 - 10) * (j + 0.5 - 10) + (k + 0.5 - 10) * (k + 0.5 - 10));
-                if (r > 7.0 || r < 5.0) continue;
-                for (int s = 0; s < 8; ++s)
-                    out.insert(out.end(), {float((i + 0.25 + 0.5 * (s & 1) + jitter()) * kCell), float((j + 0.25 + 0.5 * ((s >> 1) & 1) + jitter()) * kCell),
-                                           float((k + 0.25 + 0.5 * (s >> 2) + jitter()) * kCell)});
-            }
-    return out;
+    return test::band_particles(kCells, kCell, 777u, [](double x, double y, double z) {
+        const double r = std::sqrt((x - 10) * (x - 10) + (y - 10) * (y - 10) + (z - 10) * (z - 10));
+        return r >= 5.0 && r <= 7.0;
+    });
 }
 
 PositionsView view(const std::vector<float>& p) { return PositionsView(p.data(), p.size() / 3); }

@@ -3,8 +3,8 @@ within float tolerance, also for a sequence read from and written to paths with 
 
     python3 tests/portability/check_cli.py --wine /usr/lib/wine/wine64 --windows-cli build-windows/bin/meniscus.exe \
         --linux-cli build/bin/meniscus                      (scripts/build_windows.sh: mingw-w64 under Wine)
-    python3 tests/portability/check_cli.py --windows-cli build-clang/bin/meniscus --linux-cli build/bin/meniscus \
-        --label clang                                       (scripts/build_clang.sh: clang, libc++, libomp)
+    python3 tests/portability/check_cli.py --windows-cli build-clang-asan/bin/meniscus --linux-cli build/bin/meniscus \
+        --label clang                                       (scripts/test_sanitizers.sh: clang, libc++, libomp)
 
 Exits non-zero with the reason on any difference.
 """

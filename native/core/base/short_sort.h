@@ -10,6 +10,7 @@ namespace meniscus {
 // std::sort so that nothing turns quadratic.
 template <class Iterator, class Less = std::less<>>
 void sort_short(Iterator first, Iterator last, Less less = Less()) {
+    if (last - first < 2) return;  // also keeps first + 1 off an empty range (a null iterator: undefined)
     if (last - first > 32) {
         std::sort(first, last, less);
         return;
