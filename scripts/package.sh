@@ -32,21 +32,32 @@ done
 raw=build/wheels
 mkdir -p "$raw" dist
 rm -f "$raw"/meniscus-*.whl dist/meniscus-"$version"-*
-for python_version in 3.10 3.11 3.13; do
-  python="$(python_for "$python_version")"
-  echo "== wheel for CPython $python_version"
-  # pip builds in an isolated environment with scikit-build-core and pybind11 from PyPI (pybind11 >= 2.13 knows
-  # 3.13). Each wheel builds in build-wheel-<tag>/, beside build/ at the same depth: with CCACHE_BASEDIR (lib.sh) the
-  # core's objects, identical for every Python, come from the development build's cache, and a second run is
-  # incremental.
-  "$python" -m pip wheel . --no-deps --disable-pip-version-check -q -w "$raw" \
+# linux_wheel VERSION: the raw wheel for CPython VERSION, built by pip in an isolated environment with
+# scikit-build-core and pybind11 from PyPI (pybind11 >= 2.13 knows 3.13). Each wheel builds in
+# build-wheel-<tag>/, beside build/ at the same depth: with CCACHE_BASEDIR (lib.sh) the core's objects, identical for
+# every Python, come from the development build's cache, and a second run is incremental.
+linux_wheel() {
+  "$(python_for "$1")" -m pip wheel . --no-deps --disable-pip-version-check -q -w "$raw" \
     --config-settings=build-dir="build-wheel-{wheel_tag}" 2>&1 | { grep -v "^WARNING: Location" || true; }
   [ "${PIPESTATUS[0]}" -eq 0 ]
+}
+# The three Linux wheels build side by side, and beside the Windows cores: each is mostly one process at a time (pip's
+# environment, CMake's configure, the binding's one file), which left a core idle for most of this script's time.
+linux_builds=()
+for python_version in 3.10 3.11 3.13; do
+  linux_wheel "$python_version" > "$raw/build-$python_version.log" 2>&1 &
+  linux_builds+=("$python_version:$!")
+done
+bash scripts/package_windows.sh cores
+for build in "${linux_builds[@]}"; do
+  echo "== wheel for CPython ${build%%:*}"
+  wait "${build#*:}" || { cat "$raw/build-${build%%:*}.log"; echo "the wheel for CPython ${build%%:*} failed" >&2; exit 1; }
+  cat "$raw/build-${build%%:*}.log"
 done
 for wheel in "$raw"/meniscus-"$version"-*.whl; do
   auditwheel repair -w dist "$wheel" > build/wheels/auditwheel.log 2>&1 || { cat build/wheels/auditwheel.log; exit 1; }
 done
 echo "== Blender add-on zips"
 "$tools/bin/python" scripts/package.py --platform linux-x64 --out dist dist/meniscus-"$version"-*linux*.whl
-bash scripts/package_windows.sh
+bash scripts/package_windows.sh packages
 ls -l dist

@@ -37,14 +37,32 @@ bash scripts/setup.sh
 section "C++ tests (ctest)"
 /usr/bin/ctest --test-dir build --output-on-failure -j2
 
+# Jobs beside the sections, each in its own process group, ended with this script if it stops early.
+background_groups=()
+trap 'for group in "${background_groups[@]}"; do kill -- -"$group" 2> /dev/null || true; done' EXIT
+# beside LOG COMMAND...: starts COMMAND in the background, its output in LOG; sets $beside to its process id.
+beside() {
+  local log="$1"
+  shift
+  setsid -w "$@" > "$log" 2>&1 &
+  beside=$!
+  background_groups+=("$beside")
+}
+
+# The Mantaflow bakes need only Debian's Blender 3.4, nothing built here: they run beside the packages' builds, whose
+# last files compile one at a time (alone they took 39-44 s, one core mostly idle).
+beside build/bakes.log bash tests/mantaflow/bake.sh /usr/bin/blender
+bakes=$beside
+
 section "Packages: wheels and Blender zips (scripts/package.sh)"
 bash scripts/package.sh > build/package.log 2>&1 || { tail -40 build/package.log; exit 1; }
 version="$(sed -n 's/^project(meniscus VERSION \([0-9.]*\).*/\1/p' CMakeLists.txt)"
 extension="dist/meniscus-$version-linux_x64.zip"
 legacy="dist/meniscus-$version-legacy-linux_x64.zip"
 
-section "Mantaflow caches baked by Blender 3.4 (tests/mantaflow/bake.sh)"
-bash tests/mantaflow/bake.sh /usr/bin/blender
+section "Mantaflow caches baked by Blender 3.4 (tests/mantaflow/bake.sh, run beside the packages)"
+wait "$bakes" || { cat build/bakes.log; exit 1; }
+cat build/bakes.log
 
 section "Python tests (pytest: API, CLI, quality, packages)"
 # One worker per core (pytest-xdist), each test file in one worker: the files' module fixtures (a baked sequence, a
@@ -63,9 +81,8 @@ done
 # The clang/libc++/libomp build under ASan + UBSan and its suite run beside the Windows sections, in their own process
 # group (ended with this script): Wine's programs leave about half of the cores idle, waiting on its server, and the
 # build is compiles that take whatever core is free.
-setsid -w bash scripts/test_sanitizers.sh > build/sanitizers.log 2>&1 &
-sanitizers=$!
-trap 'kill -- -"$sanitizers" 2> /dev/null || true' EXIT
+beside build/sanitizers.log bash scripts/test_sanitizers.sh
+sanitizers=$beside
 
 section "Windows: mingw-w64 cross-build, tests under Wine"
 bash scripts/build_windows.sh > build/windows.log 2>&1 || { tail -60 build/windows.log; exit 1; }
@@ -76,7 +93,6 @@ grep -E "^== |^\(|^PASS|^NOT RUN|^all|passed under|refused|written|readers:" bui
 
 section "clang++ with libc++ and libomp (macOS's toolchain) under AddressSanitizer + UBSan (run beside the Windows sections)"
 wait "$sanitizers" || { grep -v -E "Test +#[0-9]+: .* Passed" build/sanitizers.log | tail -80; exit 1; }
-trap - EXIT
 grep -E "tests passed|Total Test time|largest vertex difference|matches" build/sanitizers.log
 section "Benchmark against pysplashsurf, small version (both tools run, meshes valid; timings not judged in CI)"
 bash bench/compare.sh --quick

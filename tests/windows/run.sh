@@ -33,16 +33,30 @@ if [ "$(cat "$WINEPREFIX/.meniscus-profile" 2>/dev/null)" != "$profile" ]; then
   echo "$profile" > "$WINEPREFIX/.meniscus-profile"
 fi
 
+# The work runs in two lanes side by side, each in its own Wine prefix, so each with its own wineserver: Wine's
+# processes wait on their server's replies one at a time, and one server left the cores about half idle whatever the
+# number of processes (the bpy 5.2 suite with 2 or 4 scripts at once: 125 s; two of it at once on one server would
+# take twice that, on two servers they took 140 s). A lane keeps to its Pythons: a wheel installed into a Windows
+# CPython must not be there while a Blender suite runs the add-on in that Python.
+#   lane 3.11: the cp311 wheel, then the legacy zip and the extension zip in bpy 4.5      (this prefix)
+#   lane 3.10/3.13: the cp310 and cp313 wheels, then the extension zip in bpy 5.2      (a copy of it, made once)
+second_prefix="$PWD/build/windows/wineprefix-2"
+if [ "$(cat "$second_prefix/.meniscus-profile" 2>/dev/null)" != "$profile" ]; then
+  /usr/lib/wine/wineserver -w 2> /dev/null || true  # the registry written above is saved when the server ends
+  rm -rf "$second_prefix" "$second_prefix.partial"
+  cp -a "$WINEPREFIX" "$second_prefix.partial"
+  mv "$second_prefix.partial" "$second_prefix"
+fi
+
 # What Windows functions Wine 8 lacks and numpy, Python 3.13 and bpy 5.2 need, given to each Windows CPython by the
 # harness (tests/windows/wine_shims.py; nothing of it is in a package).
 wine_shims() { python3 tests/windows/wine_shims.py "$1" > /dev/null; }
-for python_version in 3.10 3.11 3.13; do
-  tag="cp${python_version/./}"
-  started=$SECONDS
+wheel_checks() {  # wheel_checks VERSION: the Windows wheel for CPython VERSION in that Windows CPython
+  local python_version="$1" tag="cp${1/./}" started=$SECONDS python numpy numpy_version=1.26.4 checks=()
   python="$(windows_python "$python_version")"
   wine_shims "$python"
-  numpy_version=1.26.4 checks=()  # the numpy of bpy 4.5; it has no wheel for 3.13
-  [ "$python_version" = 3.13 ] && numpy_version=2.5.5  # the numpy of bpy 5.2
+  # numpy 1.26.4 is the numpy of bpy 4.5; it has no wheel for 3.13, where 2.5.5 is bpy 5.2's.
+  [ "$python_version" = 3.13 ] && numpy_version=2.5.5
   # The legacy zip's Python (Blender 3.4-4.1 on Windows): its core's build and install, checked in one frame; every
   # other check runs on 3.11 and 3.13 (the same code, built the same way).
   [ "$python_version" = 3.10 ] && checks=(--quick --legacy-zip "dist/meniscus-$version-legacy-windows_x64.zip")
@@ -54,17 +68,19 @@ for python_version in 3.10 3.11 3.13; do
   python3 tests/windows/test_wheels.py --python "$python" \
     --wheel "dist/meniscus-$version-$tag-$tag-win_amd64.whl" --numpy "$numpy" --linux-cli build/bin/meniscus \
     "${checks[@]}"
+  /usr/lib/wine/wineserver -w 2> /dev/null || true  # its server ends before the lane's Blender session starts one
   echo "($((SECONDS - started)) s)"
-done
+}
 
 # The Mantaflow caches the suite reads are baked by Debian's Blender (nothing to do when up to date) into build/; the
 # suite looks for them under MENISCUS_BUILD, which here names the mingw-w64 build.
 MENISCUS_BUILD=build bash tests/mantaflow/bake.sh /usr/bin/blender > /dev/null
 ln -sfn "$PWD/build/mantaflow" build-windows/mantaflow
-# One Wine session for the Blender suites, which run their scripts side by side (tests/blender/run.sh): its server and
-# system services (services.exe, rpcss, ...) start here, once, with no script's output as theirs. Started by a
-# script's process they keep its stderr, the pipe that tests/windows/python-wine reads to its end, open for as long as
-# they live, and that script looked hung for minutes. Debian's Wine finds the server under TMPDIR: the suites' own.
+# One Wine session per lane for its Blender suites, which run their scripts side by side (tests/blender/run.sh): its
+# server and system services (services.exe, rpcss, ...) start here, once, with no script's output as theirs. Started
+# by a script's process they keep its stderr, the pipe that tests/windows/python-wine reads to its end, open for as
+# long as they live, and that script looked hung for minutes. Debian's Wine finds the server under TMPDIR: the suites'
+# own. The session is the prefix's (WINEPREFIX).
 wine_session() {  # wine_session start|stop
   if [ "$1" = start ]; then
     TMPDIR="$profile" /usr/lib/wine/wineserver -p < /dev/null > /dev/null 2>&1 || true  # Wine 8's exits 2 on success
@@ -73,8 +89,6 @@ wine_session() {  # wine_session start|stop
     TMPDIR="$profile" /usr/lib/wine/wineserver -k 2> /dev/null || true
   fi
 }
-trap 'wine_session stop' EXIT
-wine_session start
 
 # blender_suite VERSION ZIP KIND: tests/blender/run.sh with ZIP installed into the Windows bpy VERSION, in its Windows
 # CPython under Wine (MENISCUS_BLENDER_SCRIPTS and MENISCUS_BLENDER_NOT_RUN pass through).
@@ -85,15 +99,13 @@ blender_suite() {
     MENISCUS_WINDOWS_PYTHONPATH="$PWD/$(windows_bpy "$1")" MENISCUS_BUILD="$PWD/build-windows" \
     bash tests/blender/run.sh tests/windows/python-wine "$2" "$3"
 }
-
-# The legacy zip (Blender 3.4-4.1 on Windows). PyPI has no Windows bpy older than 4.2, but 4.2+ still installs legacy
-# add-ons: installed into bpy 4.5 as a 4.1 user installs it (Preferences > Add-ons > Install, then enable), its cp311
-# core is the one loaded (install.py: a copy of the add-on folder's core), a frame surfaces, and the enabled add-on
-# is removed (uninstall.py). Its cp310 core: the 3.10 pass above (check_legacy_addon.py).
-echo "== Blender 4.5 (Windows bpy from PyPI, Windows CPython 3.11) under Wine with the legacy Windows zip"
-started=$SECONDS
-MENISCUS_BLENDER_SCRIPTS=uninstall blender_suite 4.5 "dist/meniscus-$version-legacy-windows_x64.zip" legacy
-echo "($((SECONDS - started)) s)"
+extension_suite() {  # extension_suite VERSION [NOT RUN list]: the Windows extension zip in Windows bpy VERSION
+  local started=$SECONDS
+  echo "== Blender $1 (Windows bpy from PyPI, Windows CPython $([ "$1" = 5.2 ] && echo 3.13 || echo 3.11)) under Wine" \
+       "with the Windows extension zip"
+  MENISCUS_BLENDER_NOT_RUN="${2:-}" blender_suite "$1" "dist/meniscus-$version-windows_x64.zip" extension
+  echo "($((SECONDS - started)) s)"
+}
 
 # Blender 5.2 runs the scripts whose subject differs on Windows between 4.5 and 5.2: the extension installer and the
 # core copy (install.py, test_safe_update: Python 3.13's file functions), the cp313 core with numpy 2.x writing a
@@ -111,13 +123,34 @@ Windows; run under Windows bpy 4.5 and, for 5.2's API, in Linux bpy 5.2
 test_fluid_domain test_fluid_domain_bake test_fluid_domain_fill test_fluid_domain_stale: time; the domain's logic and the \
 core's fill, the same on every platform (Mantaflow's files through the cp313 core on Windows: test_mantaflow_files); run \
 under Windows bpy 4.5 and in Linux bpy 5.2"
-for blender_version in 4.5 5.2; do
-  python_version=3.11 not_run=""
-  [ "$blender_version" = 5.2 ] && python_version=3.13 not_run="$windows_52_not_run"
-  echo "== Blender $blender_version (Windows bpy from PyPI, Windows CPython $python_version) under Wine with the" \
-       "Windows extension zip"
-  started=$SECONDS
-  MENISCUS_BLENDER_NOT_RUN="$not_run" blender_suite "$blender_version" "dist/meniscus-$version-windows_x64.zip" \
-    extension
-  echo "($((SECONDS - started)) s)"
-done
+lane_310_313() {
+  export WINEPREFIX="$second_prefix"
+  wheel_checks 3.10
+  wheel_checks 3.13
+  wine_session start
+  extension_suite 5.2 "$windows_52_not_run"
+  wine_session stop
+}
+lane_310_313 > build/windows-lane-310-313.log 2>&1 &
+second_lane=$!
+# Ends the other lane and both prefixes' servers, with every Wine process of theirs (set -e holds in the trap too).
+trap 'kill "$second_lane" 2> /dev/null || true; for prefix in "$PWD/build/windows/wineprefix" "$second_prefix"; do
+  WINEPREFIX="$prefix" wine_session stop; WINEPREFIX="$prefix" /usr/lib/wine/wineserver -k 2> /dev/null || true; done' EXIT
+
+wheel_checks 3.11
+wine_session start
+# The legacy zip (Blender 3.4-4.1 on Windows). PyPI has no Windows bpy older than 4.2, but 4.2+ still installs legacy
+# add-ons: installed into bpy 4.5 as a 4.1 user installs it (Preferences > Add-ons > Install, then enable), its cp311
+# core is the one loaded (install.py: a copy of the add-on folder's core), a frame surfaces, and the enabled add-on
+# is removed (uninstall.py). Its cp310 core: the 3.10 pass (check_legacy_addon.py).
+echo "== Blender 4.5 (Windows bpy from PyPI, Windows CPython 3.11) under Wine with the legacy Windows zip"
+started=$SECONDS
+MENISCUS_BLENDER_SCRIPTS=uninstall blender_suite 4.5 "dist/meniscus-$version-legacy-windows_x64.zip" legacy
+echo "($((SECONDS - started)) s)"
+extension_suite 4.5
+wine_session stop
+
+second_lane_status=0
+wait "$second_lane" || second_lane_status=$?
+cat build/windows-lane-310-313.log
+exit "$second_lane_status"
